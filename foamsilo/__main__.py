@@ -1,0 +1,7 @@
+"""``python -m foamsilo``."""
+
+import sys
+
+from foamsilo.cli import main
+
+sys.exit(main())

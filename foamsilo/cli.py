@@ -1,0 +1,559 @@
+"""The ``foamsilo`` command line.
+
+Every command takes ``--json``: a single JSON object on stdout and nothing
+else.  Without it the output is for people.  Exit status: 0 success,
+1 failure (or, for ``doctor``, something missing), 2 bad input (the message
+names the field and what is allowed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from foamsilo import __version__
+from foamsilo.errors import (
+    DivergenceError,
+    FoamError,
+    FoamsiloError,
+    MeshError,
+    SceneError,
+    ToolchainError,
+)
+
+DEFAULT_RUNS_DIR = Path("runs")
+
+
+# ----------------------------------------------------------------------------- output
+
+
+def _console() -> Any:
+    from rich.console import Console
+
+    return Console(stderr=False, highlight=False)
+
+
+def _emit(args: argparse.Namespace, payload: dict[str, Any], human: Callable[[], None]) -> None:
+    if args.json:
+        sys.stdout.write(json.dumps(payload, indent=2, default=_json_default) + "\n")
+    else:
+        human()
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, Path):
+        return str(o)
+    if isinstance(o, float) and not math.isfinite(o):
+        return None
+    return str(o)
+
+
+def _error_payload(exc: BaseException) -> dict[str, Any]:
+    err: dict[str, Any] = {"type": type(exc).__name__, "message": str(exc)}
+    if isinstance(exc, SceneError):
+        err["field"] = exc.field
+    if isinstance(exc, ToolchainError):
+        err.update(component=exc.component, fix=exc.fix)
+    if isinstance(exc, FoamError):
+        err.update(command=exc.command, returncode=exc.returncode, output=exc.output[-4000:])
+    if isinstance(exc, DivergenceError):
+        err.update(
+            quantity=exc.quantity,
+            time=exc.time,
+            last_good_time=exc.last_good_time,
+            case_dir=str(exc.case_dir),
+        )
+    if isinstance(exc, MeshError) and exc.geometry_file:
+        err["geometry_file"] = str(exc.geometry_file)
+    return {"ok": False, "error": err}
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _load(spec: str, overrides: list[str] | None) -> tuple[Any, str | None]:
+    """Scene from a preset or file; also the file text to copy into the case."""
+    from foamsilo.scene import load_scene
+
+    scene = load_scene(spec, overrides)
+    p = Path(spec)
+    text = None
+    if p.exists() and not overrides:
+        text = p.read_text()
+    return scene, text
+
+
+def _progress_printer(quiet: bool) -> tuple[Callable[..., None] | None, Callable[[], None]]:
+    """Make a progress callback on stderr (simulated time, dt, Courant, ETA)."""
+    if quiet or not sys.stderr.isatty():
+        return None, lambda: None
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+    prog = Progress(
+        TextColumn("[bold]siloFoam"),
+        BarColumn(),
+        TextColumn("t = {task.fields[t]:.4g} / {task.total:.4g} s"),
+        TextColumn("dt {task.fields[dt]:.2e}"),
+        TextColumn("Co {task.fields[co]:.2f} (grains {task.fields[gco]:.2f})"),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    )
+    state: dict[str, Any] = {"task": None, "last": 0.0}
+
+    def update(monitor: Any, end_time: float) -> None:
+        now = time.monotonic()
+        if now - state["last"] < 0.2:
+            return
+        state["last"] = now
+        s = monitor.steps[-1]
+        if state["task"] is None:
+            prog.start()
+            state["task"] = prog.add_task("run", total=end_time, t=0.0, dt=0.0, co=0.0, gco=0.0)
+        prog.update(
+            state["task"],
+            completed=s.time,
+            t=s.time,
+            dt=s.delta_t,
+            co=s.courant,
+            gco=s.granular_courant,
+        )
+
+    def stop() -> None:
+        if state["task"] is not None:
+            prog.stop()
+
+    return update, stop
+
+
+def _is_case_dir(p: Path) -> bool:
+    from foamsilo.case import METADATA_FILE
+
+    return (p / METADATA_FILE).exists()
+
+
+def _run_finished(case: Path) -> bool:
+    from foamsilo.run import _control_value, time_directories
+
+    times = time_directories(case)
+    if not times:
+        return False
+    end = _control_value(case, "endTime")
+    return float(times[-1]) >= end * (1 - 1e-9) and (case / "log.siloFoam").exists()
+
+
+# ----------------------------------------------------------------------------- commands
+
+
+def cmd_doctor(args: argparse.Namespace) -> int:
+    """Report OpenFOAM, headers, solver build, gmsh and MPI."""
+    from foamsilo.solver import find_solver
+    from foamsilo.toolchain import SETUP_COMMAND, find_openfoam, gmsh_version, mpi_info
+
+    report: dict[str, Any] = {"foamsilo_version": __version__}
+    missing: list[dict[str, str]] = []
+    of = None
+    try:
+        of = find_openfoam()
+        report["openfoam"] = {
+            "found": True,
+            "version": of.version,
+            "source": of.source,
+            "project_dir": str(of.project_dir),
+            "bin": str(of.appbin),
+        }
+    except ToolchainError as exc:
+        report["openfoam"] = {"found": False, "fix": exc.fix}
+        missing.append({"component": "openfoam", "fix": exc.fix})
+    if of is not None:
+        report["headers"] = {
+            "found": of.has_headers,
+            "source_dir": str(of.source_dir) if of.source_dir else None,
+        }
+        if not of.has_headers:
+            missing.append({"component": "headers", "fix": SETUP_COMMAND})
+        build = find_solver(of) if of.has_headers else None
+        report["solver"] = {
+            "found": build is not None,
+            "executable": str(build.executable) if build else None,
+            "library": str(build.library) if build else None,
+            "source_hash": build.source_hash if build else None,
+        }
+        if build is None:
+            missing.append({"component": "solver", "fix": "foamsilo build-solver"})
+    gv = gmsh_version()
+    report["gmsh"] = {"found": gv is not None, "version": gv}
+    if gv is None:
+        missing.append({"component": "gmsh", "fix": SETUP_COMMAND})
+    mpi = mpi_info()
+    report["mpi"] = {"found": mpi["mpirun"] is not None, **mpi}
+    if mpi["mpirun"] is None:
+        missing.append({"component": "mpi", "fix": SETUP_COMMAND})
+    report["ok"] = not missing
+    report["missing"] = missing
+
+    def human() -> None:
+        from rich.table import Table
+
+        t = Table(title=f"foamsilo {__version__} doctor")
+        for col in ("component", "status", "details"):
+            t.add_column(col)
+        ofr = report["openfoam"]
+        t.add_row(
+            "OpenFOAM",
+            "ok" if ofr["found"] else "[red]missing",
+            f"{ofr.get('version', '')} ({ofr.get('source', '')}) {ofr.get('bin', '')}",
+        )
+        if "headers" in report:
+            h = report["headers"]
+            t.add_row(
+                "headers + wmake",
+                "ok" if h["found"] else "[red]missing",
+                str(h["source_dir"] or ""),
+            )
+            s = report["solver"]
+            t.add_row(
+                "siloFoam build", "ok" if s["found"] else "[red]missing", str(s["executable"] or "")
+            )
+        t.add_row("gmsh", "ok" if gv else "[red]missing", str(gv or ""))
+        t.add_row(
+            "MPI",
+            "ok" if mpi["mpirun"] else "[red]missing",
+            f"{mpi['version'] or ''} {mpi['mpirun'] or ''}",
+        )
+        con = _console()
+        con.print(t)
+        for m in missing:
+            con.print(f"[red]missing {m['component']}[/]: run [bold]{m['fix']}[/]")
+
+    _emit(args, report, human)
+    return 0 if not missing else 1
+
+
+def cmd_presets(args: argparse.Namespace) -> int:
+    """List the named scenes of the papers."""
+    from foamsilo.scene import preset_data, preset_names
+
+    items = [
+        {"name": n, "description": preset_data(n).get("description", "")} for n in preset_names()
+    ]
+
+    def human() -> None:
+        con = _console()
+        for it in items:
+            con.print(f"[bold]{it['name']:<16}[/] {it['description']}")
+
+    _emit(args, {"ok": True, "presets": items}, human)
+    return 0
+
+
+def cmd_new(args: argparse.Namespace) -> int:
+    """Write a case (dictionaries, mesh, initial fill)."""
+    from foamsilo.case import create_case
+    from foamsilo.toolchain import find_openfoam
+
+    scene, text = _load(args.scene, args.set)
+    case = create_case(
+        scene,
+        Path(args.output),
+        find_openfoam(),
+        overwrite=args.overwrite,
+        scene_text=text,
+        dump_geometry=args.dump_geometry,
+    )
+    payload = {"ok": True, **case.as_dict()}
+
+    def human() -> None:
+        con = _console()
+        con.print(
+            f"wrote case [bold]{case.path}[/] ({case.representation}, "
+            f"{case.mesh.cells if case.mesh else '?'} cells, {len(case.files)} files)"
+        )
+        con.print(f"run it: foamsilo run {case.path}")
+
+    _emit(args, payload, human)
+    return 0
+
+
+def cmd_mesh(args: argparse.Namespace) -> int:
+    """Mesh a scene and report checkMesh's verdict and figures."""
+    from foamsilo.case import create_case
+    from foamsilo.toolchain import find_openfoam
+
+    scene, text = _load(args.scene, args.set)
+    of = find_openfoam()
+    if args.output:
+        case = create_case(
+            scene,
+            Path(args.output),
+            of,
+            overwrite=args.overwrite,
+            scene_text=text,
+            dump_geometry=args.dump_geometry,
+        )
+    else:
+        with tempfile.TemporaryDirectory(prefix="foamsilo-mesh-") as tmp:
+            case = create_case(
+                scene, Path(tmp) / scene.name, of, scene_text=text, dump_geometry=args.dump_geometry
+            )
+    assert case.mesh is not None
+    payload = {"ok": True, "scene": scene.name, **case.mesh.as_dict()}
+    if not args.output:
+        payload.pop("msh_file", None)
+
+    def human() -> None:
+        m = case.mesh
+        assert m is not None
+        c = m.check
+        _console().print(
+            f"{scene.name}: {m.representation}, {m.cells} cells ({m.cell_kind}), checkMesh "
+            f"{'OK' if c.ok else 'FAILED'}: max non-orthogonality {c.max_non_orthogonality:.3g} "
+            f"deg, max skewness {c.max_skewness:.3g}, max aspect ratio "
+            f"{c.max_aspect_ratio:.3g} ({m.seconds:.2f} s)"
+        )
+
+    _emit(args, payload, human)
+    return 0
+
+
+def cmd_build_solver(args: argparse.Namespace) -> int:
+    """Build (or rebuild) siloFoam and the mu(I) library."""
+    from foamsilo.solver import ensure_solver
+
+    con = _console()
+    log = None if args.json else (lambda m: con.print(m))
+    build = ensure_solver(force=not args.if_needed, log=log)
+    payload = {
+        "ok": True,
+        "executable": str(build.executable),
+        "library": str(build.library),
+        **build.info,
+    }
+    _emit(args, payload, lambda: con.print(f"siloFoam: {build.executable}"))
+    return 0
+
+
+def _print_summary(summary: dict[str, Any], run: dict[str, Any] | None) -> None:
+    from rich.table import Table
+
+    con = _console()
+    t = Table(
+        title=f"{summary['scene']} ({summary['representation']}, "
+        f"{summary['cells_across']} cells across L, {summary['cells']} cells)"
+    )
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    if summary["steady"]:
+        t.add_row("steady Q", f"{summary['Q']:.5g} {summary['Q_units']}")
+        t.add_row(
+            "Q/(rho sqrt(g L^3)), orifice flux",
+            f"{summary['Q_dimensionless']:.4f} +- {summary['Q_std_dimensionless']:.4f}",
+        )
+        t.add_row(
+            "Q/(rho sqrt(g L^3)), volume decrease", f"{summary['Q_from_volume_dimensionless']:.4f}"
+        )
+        w = summary["steady_window_s"]
+        t.add_row("steady window", f"{w[0]:.3g} - {w[1]:.3g} s")
+        ref = summary["reference"]
+        t.add_row(
+            "Zhou et al. 2019 (continuum)",
+            f"{ref['Q_dimensionless']:.2f} +- {ref['spread']:.2f} ({ref['rel_diff']:+.1%})",
+        )
+        bev = summary["beverloo_2d"]
+        t.add_row(
+            f"2D Beverloo, C = {bev['C']:.2f}",
+            f"{bev['Q_dimensionless']:.4f} ({bev['rel_diff']:+.1%})",
+        )
+    else:
+        t.add_row("steady", f"[red]no[/]: {summary['steady_reason']}")
+    t.add_row("mass balance error", f"{summary['mass_balance_rel_error']:.1e}")
+    if run:
+        t.add_row(
+            "solver wall / CPU time",
+            f"{run['wall_seconds']:.1f} s / {run['cpu_seconds']:.1f} s ({run['steps']} steps)",
+        )
+    con.print(t)
+    con.print(f"files: {summary['case_dir']}/discharge.csv, discharge.png, summary.json")
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """Create (if needed), run and post-process a case."""
+    from foamsilo.case import create_case, read_metadata, scene_digest
+    from foamsilo.post import summarize
+    from foamsilo.run import run_solver
+    from foamsilo.solver import ensure_solver
+    from foamsilo.toolchain import find_openfoam
+
+    if args.np and args.np > 1:
+        raise FoamsiloError("parallel runs (--np > 1) are not available yet; use --np 1")
+    of = find_openfoam()
+    spec = Path(args.scene)
+    con = _console()
+    say = (lambda m: None) if args.json or args.quiet else (lambda m: con.print(m))
+    if spec.is_dir() and _is_case_dir(spec):
+        if args.set:
+            raise SceneError("--set", "cannot change an existing case; make a new one")
+        case_dir = spec.resolve()
+    else:
+        scene, text = _load(args.scene, args.set)
+        case_dir = Path(args.output or DEFAULT_RUNS_DIR / scene.name).resolve()
+        reuse = False
+        if _is_case_dir(case_dir) and not args.overwrite:
+            if read_metadata(case_dir).get("scene_digest") != scene_digest(scene):
+                raise FoamsiloError(
+                    f"{case_dir} holds a case of a different scene (use --overwrite or -o)"
+                )
+            reuse = True
+        if not reuse:
+            say(f"writing case {case_dir}")
+            create_case(scene, case_dir, of, overwrite=args.overwrite, scene_text=text)
+        else:
+            say(f"using existing case {case_dir}")
+    run_info = None
+    if _run_finished(case_dir) and not args.rerun:
+        say("run already finished; post-processing")
+    else:
+        build = ensure_solver(of=of, log=say)
+        update, stop = _progress_printer(args.quiet or args.json)
+        try:
+            result = run_solver(case_dir, of, build, progress=update)
+        finally:
+            stop()
+        run_info = result.as_dict()
+        (case_dir / "run.json").write_text(json.dumps(run_info, indent=2))
+    if run_info is None and (case_dir / "run.json").exists():
+        run_info = json.loads((case_dir / "run.json").read_text())
+    summary = summarize(case_dir, run_info)
+    _emit(args, {"ok": True, **summary}, lambda: _print_summary(summary, run_info))
+    return 0
+
+
+def cmd_post(args: argparse.Namespace) -> int:
+    """Post-process a case: Q(t), steady Q, mass balance, plot."""
+    from foamsilo.post import summarize
+
+    case = Path(args.case).resolve()
+    run_info = None
+    if (case / "run.json").exists():
+        run_info = json.loads((case / "run.json").read_text())
+    summary = summarize(case, run_info)
+    _emit(args, {"ok": True, **summary}, lambda: _print_summary(summary, run_info))
+    return 0
+
+
+def cmd_scene_reference(args: argparse.Namespace) -> int:
+    """Print the scene-file reference (Markdown)."""
+    from foamsilo.scene import reference_markdown
+
+    text = reference_markdown()
+    _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
+    return 0
+
+
+# ----------------------------------------------------------------------------- parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser (also used to document the CLI)."""
+    p = argparse.ArgumentParser(
+        prog="foamsilo",
+        description="OpenFOAM simulations of granular silo discharge, and their cross-checks.",
+    )
+    p.add_argument("--version", action="version", version=f"foamsilo {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def add(name: str, func: Callable[[argparse.Namespace], int], help_: str) -> Any:
+        sp = sub.add_parser(name, help=help_, description=help_)
+        sp.add_argument("--json", action="store_true", help="one JSON object on stdout")
+        sp.set_defaults(func=func)
+        return sp
+
+    def scene_args(sp: Any) -> None:
+        sp.add_argument("scene", help="preset name or scene TOML file")
+        sp.add_argument(
+            "--set",
+            action="append",
+            metavar="KEY=VALUE",
+            default=[],
+            help="override a scene value, e.g. mesh.cells_across=32 (repeatable)",
+        )
+
+    add("doctor", cmd_doctor, "report what OpenFOAM, headers, solver, gmsh and MPI are found")
+    add("presets", cmd_presets, "list the named scenes of the papers")
+
+    sp = add("new", cmd_new, "write a ready-to-run case for a scene")
+    scene_args(sp)
+    sp.add_argument("-o", "--output", required=True, help="case directory to write")
+    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--dump-geometry",
+        type=Path,
+        metavar="FILE",
+        help="also write the gmsh geometry (.geo_unrolled, .brep)",
+    )
+
+    sp = add("mesh", cmd_mesh, "mesh a scene and report the checkMesh verdict")
+    scene_args(sp)
+    sp.add_argument("-o", "--output", help="keep the meshed case here")
+    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--dump-geometry", type=Path, metavar="FILE", help="write the gmsh geometry for inspection"
+    )
+
+    sp = add("run", cmd_run, "run a scene (or a case directory) and post-process it")
+    sp.add_argument("scene", help="preset name, scene TOML file, or case directory")
+    sp.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        default=[],
+        help="override a scene value (repeatable)",
+    )
+    sp.add_argument("-o", "--output", help=f"case directory (default {DEFAULT_RUNS_DIR}/<name>)")
+    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--rerun", action="store_true", help="run the solver even if the case already finished"
+    )
+    sp.add_argument("--np", type=int, default=1, help="MPI ranks (1: serial)")
+    sp.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    sp = add("post", cmd_post, "post-process a case: Q(t), steady Q, plot, summary")
+    sp.add_argument("case", help="case directory")
+
+    add("build-solver", cmd_build_solver, "build siloFoam and its mu(I) library").add_argument(
+        "--if-needed", action="store_true", help="only if the sources changed"
+    )
+    add("scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``foamsilo`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except KeyboardInterrupt:
+        sys.stderr.write("interrupted\n")
+        return 130
+    except FoamsiloError as exc:
+        code = 2 if isinstance(exc, SceneError) else 1
+        if getattr(args, "json", False):
+            sys.stdout.write(
+                json.dumps(_error_payload(exc), indent=2, default=_json_default) + "\n"
+            )
+        else:
+            sys.stderr.write(f"foamsilo: error: {exc}\n")
+        return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,118 @@
+"""Error types of foamsilo.
+
+Every error a user can cause or meet carries enough to act on: the scene
+field and its allowed range, the OpenFOAM command with its captured output,
+or the quantity, time and last good time directory of a diverged run.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class FoamsiloError(Exception):
+    """Base class of all foamsilo errors."""
+
+
+class SceneError(FoamsiloError, ValueError):
+    """A scene value is missing, unknown or out of its allowed range.
+
+    Parameters
+    ----------
+    field
+        Dotted name of the offending scene field (``"silo.orifice_width"``).
+    message
+        What is wrong and what is allowed.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        self.field = field
+        super().__init__(f"{field}: {message}")
+
+
+class ToolchainError(FoamsiloError):
+    """A required tool (OpenFOAM, headers, wmake, MPI, gmsh) is missing.
+
+    Parameters
+    ----------
+    component
+        What is missing.
+    fix
+        The command that installs or builds it.
+    """
+
+    def __init__(self, component: str, message: str, fix: str) -> None:
+        self.component = component
+        self.fix = fix
+        super().__init__(f"{component}: {message} (fix: {fix})")
+
+
+class FoamError(FoamsiloError):
+    """An OpenFOAM command failed.
+
+    Parameters
+    ----------
+    command
+        The command line that was run.
+    returncode
+        Its exit status.
+    output
+        Captured output (the tail of stdout and stderr).
+    case_dir
+        Case the command ran in.
+    """
+
+    def __init__(
+        self, command: str, returncode: int, output: str, case_dir: Path | None = None
+    ) -> None:
+        self.command = command
+        self.returncode = returncode
+        self.output = output
+        self.case_dir = case_dir
+        tail = "\n".join(output.strip().splitlines()[-25:])
+        where = f" in {case_dir}" if case_dir else ""
+        super().__init__(f"'{command}' failed with status {returncode}{where}:\n{tail}")
+
+
+class MeshError(FoamsiloError):
+    """Meshing failed; ``geometry_file`` holds the geometry for inspection."""
+
+    def __init__(self, message: str, geometry_file: Path | None = None) -> None:
+        self.geometry_file = geometry_file
+        hint = f" (geometry written to {geometry_file})" if geometry_file else ""
+        super().__init__(message + hint)
+
+
+class DivergenceError(FoamsiloError):
+    """A run was stopped because it diverged; the case is kept.
+
+    Parameters
+    ----------
+    quantity
+        What diverged (``"Courant number"``, ``"p_rgh residual"``, ``"deltaT"``).
+    time
+        Simulated time at which it was detected [s].
+    last_good_time
+        Name of the last complete time directory, or None.
+    case_dir
+        The case, kept for inspection.
+    """
+
+    def __init__(
+        self,
+        quantity: str,
+        time: float | None,
+        detail: str,
+        last_good_time: str | None,
+        case_dir: Path,
+    ) -> None:
+        self.quantity = quantity
+        self.time = time
+        self.detail = detail
+        self.last_good_time = last_good_time
+        self.case_dir = case_dir
+        t = f"t = {time:.6g} s" if time is not None else "start-up"
+        super().__init__(
+            f"run diverged: {quantity} at {t} ({detail}); last good time directory: "
+            f"{last_good_time or 'none'}; case kept in {case_dir}"
+        )

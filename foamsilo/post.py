@@ -1,0 +1,382 @@
+"""Reduce a run to the numbers of the experiments: Q(t), steady Q, mass balance.
+
+Sources are the function-object outputs the case writes every time step
+(``postProcessing/orificeFlow`` and ``postProcessing/granularVolume``), merged
+across restarts.  Two independent estimates of the discharge rate are made:
+
+* from the granular volume flux through the orifice (``alphaPhi0.granular``,
+  the MULES flux actually applied over each step), and
+* from the decrease of the granular volume in the silo (a linear fit of V(t)
+  over the steady window).
+
+The steady window follows the experiments (Zhou et al. 2019, sec. II.B):
+the mean of the instantaneous rate over the stationary regime, after the
+start-up transient and before the silo runs low.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from foamsilo import __version__
+from foamsilo.analytic.beverloo import (
+    ZHOU_PLANAR_Q,
+    ZHOU_PLANAR_Q_SPREAD,
+    beverloo_2d,
+    beverloo_2d_constant,
+)
+from foamsilo.case import SCENE_FILE, read_metadata
+from foamsilo.errors import FoamsiloError
+from foamsilo.scene import Scene, load_scene_file
+
+DISCHARGE_CSV = "discharge.csv"
+DISCHARGE_PNG = "discharge.png"
+SUMMARY_JSON = "summary.json"
+
+#: Smoothed Q must stay within this of the plateau for the window to start
+STEADY_TOLERANCE = 0.02
+#: Largest relative drift of Q over the window still called steady
+STEADY_MAX_DRIFT = 0.03
+#: Window ends when the equivalent fill height drops below this many L
+LOW_FILL = 0.5
+
+
+def read_function_object(case: Path, name: str) -> tuple[list[str], np.ndarray]:
+    """Read ``postProcessing/<name>/<t0>/*.dat``, merged over restarts.
+
+    A restart from t0 writes a new ``<t0>`` directory; its rows replace the
+    earlier ones from t0 on.
+
+    Returns
+    -------
+    columns, data
+        Column names (first is ``Time``) and the rows, sorted by time.
+    """
+    root = Path(case) / "postProcessing" / name
+    if not root.is_dir():
+        raise FoamsiloError(f"no function-object output {root} (has the case run?)")
+    starts = sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: float(p.name))
+    columns: list[str] = []
+    data = np.empty((0, 0))
+    for start in starts:
+        files = sorted(start.glob("*.dat"))
+        if not files:
+            continue
+        lines = files[0].read_text().splitlines()
+        header = [ln for ln in lines if ln.startswith("#")]
+        cols = header[-1].lstrip("#").split("\t") if header else []
+        cols = [c.strip() for c in cols if c.strip()]
+        rows = [ln.split() for ln in lines if ln.strip() and not ln.startswith("#")]
+        if not rows:
+            continue
+        block = np.array([[float(x) for x in r] for r in rows if len(r) == len(rows[0])])
+        columns = cols or columns
+        if data.size:
+            data = data[data[:, 0] < block[0, 0] - 1e-12]
+            data = np.vstack([data, block])
+        else:
+            data = block
+    if not data.size:
+        raise FoamsiloError(f"function-object output {root} is empty")
+    return columns, data
+
+
+@dataclass
+class Discharge:
+    """Time series of one run (per unit depth for a planar scene).
+
+    Attributes
+    ----------
+    time
+        Simulated time at the end of each step [s].
+    delta_t
+        Step lengths [s].
+    volume_flux
+        Granular volume flux out through the orifice over each step
+        [m^3/s, or m^2/s per unit depth for planar].
+    volume
+        Granular volume in the domain [m^3, or m^2].
+    initial_volume
+        Volume before the first step.
+    density
+        Grain density [kg/m^3] (Q = density * volume_flux).
+    depth
+        Depth the planar fluxes were divided by [m] (1 for 3D).
+    """
+
+    time: np.ndarray
+    delta_t: np.ndarray
+    volume_flux: np.ndarray
+    volume: np.ndarray
+    initial_volume: float
+    density: float
+    depth: float
+
+    @property
+    def mass_flow(self) -> np.ndarray:
+        """Q(t) [kg/s, or kg/(m s) per unit depth]."""
+        return self.density * self.volume_flux
+
+    @property
+    def mass_balance_error(self) -> float:
+        """Maximum of |V(t) + outflow(0..t) - V0| / V0 over the run."""
+        out = np.cumsum(self.volume_flux * self.delta_t)
+        return float(np.max(np.abs(self.volume + out - self.initial_volume)) / self.initial_volume)
+
+
+def read_discharge(case: Path, scene: Scene) -> Discharge:
+    """Q(t) and V(t) of a case from its function-object output."""
+    _, flux = read_function_object(case, "orificeFlow")
+    _, vol = read_function_object(case, "granularVolume")
+    n = min(len(flux), len(vol))
+    flux, vol = flux[:n], vol[:n]
+    if not np.allclose(flux[:, 0], vol[:, 0], rtol=1e-9, atol=1e-12):
+        raise FoamsiloError(f"{case}: flux and volume outputs are not on the same times")
+    t = flux[:, 0]
+    dt = np.diff(np.concatenate([[0.0], t]))
+    depth = scene.cell_size if scene.representation == "planar" else 1.0
+    q = flux[:, 1] / depth
+    v = vol[:, 1] / depth
+    v0 = float(v[0] + q[0] * dt[0])
+    return Discharge(t, dt, q, v, v0, scene.material.density, depth)
+
+
+@dataclass
+class SteadyState:
+    """The stationary discharge regime and its rate.
+
+    Attributes
+    ----------
+    steady
+        A stationary regime was found (long enough, drift below the limit).
+    t_start, t_end
+        The window [s].
+    q, q_std
+        Time-weighted mean and standard deviation of Q over the window.
+    q_from_volume
+        -rho dV/dt fitted over the window (independent estimate).
+    drift
+        Relative change of Q over the window (linear fit).
+    reason
+        Why it is not steady, when it is not.
+    """
+
+    steady: bool
+    t_start: float
+    t_end: float
+    q: float
+    q_std: float
+    q_from_volume: float
+    drift: float
+    reason: str = ""
+
+
+def _smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
+    """Average over a moving time window (handles variable steps)."""
+    w = np.diff(np.concatenate([[t[0]], t]))
+    cy = np.concatenate([[0.0], np.cumsum(y * w)])
+    cw = np.concatenate([[0.0], np.cumsum(w)])
+    lo = np.searchsorted(t, t - width / 2, side="left")
+    hi = np.searchsorted(t, t + width / 2, side="right")
+    num = cy[hi] - cy[lo]
+    den = cw[hi] - cw[lo]
+    return np.where(den > 0, num / np.where(den > 0, den, 1), y)
+
+
+def find_steady(d: Discharge, scene: Scene) -> SteadyState:
+    """Locate the stationary regime of Q(t) and average over it."""
+    T = scene.time_scale
+    t, q = d.time, d.mass_flow
+    area = scene.silo.width  # planar: volume per unit depth / L = equivalent fill height
+    h_eq = d.volume / area
+    usable = (t > 0.5 * T) & (h_eq > LOW_FILL * scene.silo.width)
+    nan = SteadyState(False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
+    if usable.sum() < 20:
+        nan.reason = (
+            "run too short (or silo emptied): fewer than 20 usable steps after 0.5 sqrt(L/g)"
+        )
+        return nan
+    idx = np.flatnonzero(usable)
+    i1 = idx[-1]
+    tt, qq = t[: i1 + 1], q[: i1 + 1]
+    smooth = _smooth(tt, qq, 0.5 * T)
+    later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
+    q_ref = float(np.median(qq[later]))
+    off = np.flatnonzero((np.abs(smooth - q_ref) > STEADY_TOLERANCE * abs(q_ref)) & (tt > 0))
+    i0 = max(int(off[-1]) + 1 if off.size else idx[0], idx[0])
+    win = slice(i0, i1 + 1)
+    tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
+    if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:
+        nan.reason = (
+            f"no stationary regime: Q stayed within {STEADY_TOLERANCE:.0%} of its plateau for "
+            f"{(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(L/g) only (need >= 1)"
+        )
+        nan.t_start, nan.t_end = float(t[i0]) if i0 < len(t) else math.nan, float(t[i1])
+        return nan
+    mean = float(np.sum(qw * dtw) / np.sum(dtw))
+    std = float(np.sqrt(np.sum((qw - mean) ** 2 * dtw) / np.sum(dtw)))
+    slope = np.polyfit(tw, qw, 1)[0]
+    drift = float(slope * (tw[-1] - tw[0]) / mean) if mean else math.nan
+    q_vol = float(-np.polyfit(tw, vw, 1)[0] * d.density)
+    steady = abs(drift) < STEADY_MAX_DRIFT
+    reason = "" if steady else f"Q drifts by {drift:.1%} over the window"
+    return SteadyState(steady, float(tw[0]), float(tw[-1]), mean, std, q_vol, drift, reason)
+
+
+def write_discharge_csv(d: Discharge, scene: Scene, path: Path) -> None:
+    """Q(t) table: time, dimensionless time, Q, Q dimensionless, volume, fill height."""
+    scale = scene.rho_sqrt_gL3
+    tmp = path.with_suffix(".csv.tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(
+            [
+                "t_s",
+                "t_over_sqrt_L_g",
+                "Q_kg_per_m_s",
+                "Q_over_rho_sqrt_gL3",
+                "granular_volume_m2",
+                "fill_height_m",
+            ]
+        )
+        for i in range(len(d.time)):
+            w.writerow(
+                [
+                    f"{d.time[i]:.9g}",
+                    f"{d.time[i] / scene.time_scale:.6g}",
+                    f"{d.mass_flow[i]:.9g}",
+                    f"{d.mass_flow[i] / scale:.6g}",
+                    f"{d.volume[i]:.9g}",
+                    f"{d.volume[i] / scene.silo.width:.6g}",
+                ]
+            )
+    os.replace(tmp, path)
+
+
+def plot_discharge(d: Discharge, st: SteadyState, scene: Scene, path: Path) -> None:
+    """Q/(rho sqrt(g L^3)) against t/sqrt(L/g), with the steady band and references."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scale = scene.rho_sqrt_gL3
+    T = scene.time_scale
+    fig, ax = plt.subplots(figsize=(7, 4.2), dpi=120)
+    ax.plot(d.time / T, d.mass_flow / scale, lw=1.2, color="C0", label="simulation, orifice flux")
+    if st.steady:
+        ax.axvspan(st.t_start / T, st.t_end / T, color="C0", alpha=0.08, label="steady window")
+        ax.axhline(st.q / scale, color="C0", ls="--", lw=1, label=f"steady Q = {st.q / scale:.4f}")
+    ax.axhspan(
+        ZHOU_PLANAR_Q - ZHOU_PLANAR_Q_SPREAD,
+        ZHOU_PLANAR_Q + ZHOU_PLANAR_Q_SPREAD,
+        color="C1",
+        alpha=0.15,
+        label="Zhou et al. 2019, 0.16 +- 0.01",
+    )
+    bev = float(beverloo_2d(scene.silo.orifice_width, scene.material.density, scene.gravity))
+    ax.axhline(
+        bev / scale,
+        color="C2",
+        ls=":",
+        lw=1.5,
+        label=f"2D Beverloo, C = {beverloo_2d_constant():.2f}: {bev / scale:.3f}",
+    )
+    ax.set_xlabel(r"$t/\sqrt{L/g}$")
+    ax.set_ylabel(r"$Q/(\rho\sqrt{gL^3})$")
+    ax.set_title(f"{scene.name}: {scene.mesh.cells_across} cells across L")
+    ax.set_ylim(0, max(0.25, 1.2 * float(np.max(d.mass_flow / scale))))
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    tmp = path.with_suffix(".tmp.png")
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, path)
+
+
+def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Reduce a run: write ``discharge.csv``, ``discharge.png``, ``summary.json``.
+
+    Parameters
+    ----------
+    case
+        The case directory.
+    run_info
+        Extra figures of the run (wall time, steps) to keep in the summary.
+
+    Returns
+    -------
+    dict
+        The summary (as written to ``summary.json``).
+    """
+    case = Path(case).resolve()
+    meta = read_metadata(case)
+    scene = load_scene_file(case / SCENE_FILE)
+    d = read_discharge(case, scene)
+    st = find_steady(d, scene)
+    scale = scene.rho_sqrt_gL3
+    bev = float(beverloo_2d(scene.silo.orifice_width, scene.material.density, scene.gravity))
+    steady_star = st.q / scale if st.steady else None
+    summary: dict[str, Any] = {
+        "foamsilo_version": __version__,
+        "case_dir": str(case),
+        "scene": scene.name,
+        "representation": meta.get("representation"),
+        "cells": meta.get("cells"),
+        "cells_across": scene.mesh.cells_across,
+        "simulated_time_s": float(d.time[-1]),
+        "steady": st.steady,
+        "steady_reason": st.reason or None,
+        "steady_window_s": [st.t_start, st.t_end],
+        "Q": st.q if st.steady else None,
+        "Q_std": st.q_std if st.steady else None,
+        "Q_from_volume": st.q_from_volume if st.steady else None,
+        "Q_units": "kg/(m s) per unit depth" if scene.representation == "planar" else "kg/s",
+        "Q_dimensionless": steady_star,
+        "Q_std_dimensionless": st.q_std / scale if st.steady else None,
+        "Q_from_volume_dimensionless": st.q_from_volume / scale if st.steady else None,
+        "flux_vs_volume_rel_diff": (abs(st.q - st.q_from_volume) / st.q if st.steady else None),
+        "drift": st.drift if st.steady else None,
+        "mass_balance_rel_error": d.mass_balance_error,
+        "flow_rate_scale": {"name": "rho sqrt(g L^3)", "value": scale},
+        "reference": {
+            "source": "Zhou et al. 2019, sec. III.B (open top), converged continuum rate",
+            "Q_dimensionless": ZHOU_PLANAR_Q,
+            "spread": ZHOU_PLANAR_Q_SPREAD,
+            "rel_diff": (steady_star - ZHOU_PLANAR_Q) / ZHOU_PLANAR_Q if steady_star else None,
+        },
+        "beverloo_2d": {
+            "law": "Q = C rho sqrt(g) D^(3/2) (k = 0, continuum)",
+            "C": beverloo_2d_constant(),
+            "Q_dimensionless": bev / scale,
+            "rel_diff": (st.q - bev) / bev if st.steady else None,
+        },
+    }
+    if run_info:
+        summary["run"] = run_info
+    write_discharge_csv(d, scene, case / DISCHARGE_CSV)
+    plot_discharge(d, st, scene, case / DISCHARGE_PNG)
+    tmp = case / (SUMMARY_JSON + ".tmp")
+    tmp.write_text(json.dumps(summary, indent=2, default=float))
+    os.replace(tmp, case / SUMMARY_JSON)
+    return summary
+
+
+__all__ = [
+    "Discharge",
+    "SteadyState",
+    "asdict",
+    "find_steady",
+    "read_discharge",
+    "read_function_object",
+    "summarize",
+]

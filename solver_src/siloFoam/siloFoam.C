@@ -1,0 +1,127 @@
+/*---------------------------------------------------------------------------*\
+  foamsilo: granular silo discharge with OpenFOAM
+-------------------------------------------------------------------------------
+License
+    This file is part of foamsilo, built against OpenFOAM (GPL-3.0-or-later).
+    It is distributed under the GNU General Public License v3 or later.
+
+Application
+    siloFoam
+
+Description
+    interFoam-derived solver for the discharge of a dense granular material
+    (phase 1, the VOF phase, with the mu(I) viscosity) through air (phase 2).
+
+    What differs from interFoam (all else is included from
+    $FOAM_SOLVERS/multiphase/interFoam and .../VoF):
+
+    - Projection with the coefficient dt/rho (incremental pressure
+      correction, the Basilisk/Gerris splitting) instead of 1/A: with mu(I)
+      the viscous diagonal of A is 500-5000 times rho/dt and 1/A-projection
+      lets the granular pressure swing sign from step to step (pEqn.H).
+    - rho is bounded below by the lighter phase density in that coefficient,
+      because MULES undershoots alpha slightly.
+    - The momentum predictor is always solved (it provides U*).
+    - The time step can be limited by the Courant number over the granular
+      phase only (maxGranularCo), since the air above the free surface
+      carries spurious fast velocities (granularCourantNo.H, setDeltaT.H).
+    - A static mesh; no MRF, no LTS.
+
+    Incompressible, isothermal; the granular phase keeps a constant
+    volume fraction (rho = rho_p), as in Zhou et al. 2019, section III.B.
+
+\*---------------------------------------------------------------------------*/
+
+#include "fvCFD.H"
+#include "CMULES.H"
+#include "EulerDdtScheme.H"
+#include "localEulerDdtScheme.H"
+#include "CrankNicolsonDdtScheme.H"
+#include "subCycle.H"
+#include "immiscibleIncompressibleTwoPhaseMixture.H"
+#include "turbulentTransportModel.H"
+#include "pimpleControl.H"
+#include "fvOptions.H"
+#include "fvcSmooth.H"
+
+// * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
+
+int main(int argc, char *argv[])
+{
+    argList::addNote
+    (
+        "Granular silo discharge: mu(I) granular phase (VOF) in air,"
+        " incremental dt/rho projection."
+    );
+
+    #include "postProcess.H"
+
+    #include "addCheckCaseOptions.H"
+    #include "setRootCaseLists.H"
+    #include "createTime.H"
+    #include "createMesh.H"
+    #include "createControl.H"
+    #include "createTimeControls.H"
+    #include "initContinuityErrs.H"
+    #include "createFields.H"
+    #include "createAlphaFluxes.H"
+
+    turbulence->validate();
+
+    #include "CourantNo.H"
+    #include "setInitialDeltaT.H"
+
+    // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
+    Info<< "\nStarting time loop\n" << endl;
+
+    while (runTime.run())
+    {
+        #include "readTimeControls.H"
+        #include "CourantNo.H"
+        #include "alphaCourantNo.H"
+        #include "granularCourantNo.H"
+        #include "setDeltaT.H"
+
+        ++runTime;
+
+        Info<< "Time = " << runTime.timeName() << nl << endl;
+
+        // --- Pressure-velocity PIMPLE corrector loop
+        while (pimple.loop())
+        {
+            #include "alphaControls.H"
+            #include "alphaEqnSubCycle.H"
+
+            mixture.correct();
+
+            if (pimple.frozenFlow())
+            {
+                continue;
+            }
+
+            #include "UEqn.H"
+
+            // --- Pressure corrector loop
+            while (pimple.correct())
+            {
+                #include "pEqn.H"
+            }
+
+            if (pimple.turbCorr())
+            {
+                turbulence->correct();
+            }
+        }
+
+        runTime.write();
+
+        runTime.printExecutionTime(Info);
+    }
+
+    Info<< "End\n" << endl;
+
+    return 0;
+}
+
+
+// ************************************************************************* //

@@ -1,0 +1,168 @@
+/*---------------------------------------------------------------------------*\
+  foamsilo: granular silo discharge with OpenFOAM
+-------------------------------------------------------------------------------
+License
+    This file is part of foamsilo, built against OpenFOAM (GPL-3.0-or-later).
+    It is distributed under the GNU General Public License v3 or later.
+
+\*---------------------------------------------------------------------------*/
+
+#include "muI.H"
+#include "addToRunTimeSelectionTable.H"
+#include "surfaceFields.H"
+
+// * * * * * * * * * * * * * * Static Data Members * * * * * * * * * * * * * //
+
+namespace Foam
+{
+namespace viscosityModels
+{
+    defineTypeNameAndDebug(muI, 0);
+
+    addToRunTimeSelectionTable
+    (
+        viscosityModel,
+        muI,
+        dictionary
+    );
+}
+}
+
+
+// * * * * * * * * * * * * Private Member Functions  * * * * * * * * * * * * //
+
+void Foam::viscosityModels::muI::readCoeffs()
+{
+    muICoeffs_.readEntry("mus", mus_);
+    muICoeffs_.readEntry("deltaMu", deltaMu_);
+    muICoeffs_.readEntry("I0", I0_);
+    muICoeffs_.readEntry("d", d_);
+    muICoeffs_.readEntry("etaMax", etaMax_);
+    muICoeffs_.readEntry("pMin", pMin_);
+    pName_ = muICoeffs_.getOrDefault<word>("pName", "p");
+    viscosityProperties_.readEntry("rho", rho_);
+
+    // Ranges: a bad value here would not fail, it would give wrong physics
+    if
+    (
+        mus_.value() < 0 || deltaMu_.value() < 0 || I0_.value() <= 0
+     || d_.value() <= 0 || rho_.value() <= 0 || etaMax_.value() <= 0
+     || pMin_.value() <= 0
+    )
+    {
+        FatalIOErrorInFunction(muICoeffs_)
+            << "muI coefficients out of range: need mus >= 0, deltaMu >= 0,"
+            << " I0 > 0, d > 0, rho > 0, etaMax > 0, pMin > 0; got"
+            << " mus " << mus_.value() << ", deltaMu " << deltaMu_.value()
+            << ", I0 " << I0_.value() << ", d " << d_.value()
+            << ", rho " << rho_.value() << ", etaMax " << etaMax_.value()
+            << ", pMin " << pMin_.value()
+            << exit(FatalIOError);
+    }
+}
+
+
+Foam::tmp<Foam::volScalarField>
+Foam::viscosityModels::muI::calcNu() const
+{
+    const volScalarField* pPtr =
+        U_.db().cfindObject<volScalarField>(pName_);
+
+    if (!pPtr)
+    {
+        // No pressure yet: the cap, exact for material at rest
+        return tmp<volScalarField>::New
+        (
+            IOobject
+            (
+                "nuMuI",
+                U_.time().timeName(),
+                U_.db(),
+                IOobject::NO_READ,
+                IOobject::NO_WRITE,
+                false
+            ),
+            U_.mesh(),
+            etaMax_/rho_
+        );
+    }
+
+    const volScalarField pPos(max(*pPtr, pMin_));
+
+    // |gammaDot| = sqrt(2)|symm(grad U)|, floored so that eta -> etaMax
+    // (not NaN) where the material is at rest
+    const volScalarField sr
+    (
+        max
+        (
+            strainRate(),
+            dimensionedScalar("srMin", dimless/dimTime, VSMALL)
+        )
+    );
+
+    const volScalarField I(sr*d_/sqrt(pPos/rho_));
+
+    // mu(I) = mus + deltaMu/(I0/I + 1), written without 1/I
+    const volScalarField mu(mus_ + deltaMu_*I/(I0_ + I));
+
+    return min(mu*pPos/sr, etaMax_)/rho_;
+}
+
+
+// * * * * * * * * * * * * * * * * Constructors  * * * * * * * * * * * * * * //
+
+Foam::viscosityModels::muI::muI
+(
+    const word& name,
+    const dictionary& viscosityProperties,
+    const volVectorField& U,
+    const surfaceScalarField& phi
+)
+:
+    viscosityModel(name, viscosityProperties, U, phi),
+    muICoeffs_(viscosityProperties.optionalSubDict(typeName + "Coeffs")),
+    mus_("mus", dimless, Zero),
+    deltaMu_("deltaMu", dimless, Zero),
+    I0_("I0", dimless, Zero),
+    d_("d", dimLength, Zero),
+    rho_("rho", dimDensity, Zero),
+    etaMax_("etaMax", dimDynamicViscosity, Zero),
+    pMin_("pMin", dimPressure, Zero),
+    pName_("p"),
+    nu_
+    (
+        IOobject
+        (
+            name,
+            U_.time().timeName(),
+            U_.db(),
+            IOobject::NO_READ,
+            IOobject::AUTO_WRITE
+        ),
+        U_.mesh(),
+        dimensionedScalar(dimViscosity, Zero)
+    )
+{
+    readCoeffs();
+    nu_ = calcNu();
+}
+
+
+// * * * * * * * * * * * * * * Member Functions  * * * * * * * * * * * * * * //
+
+bool Foam::viscosityModels::muI::read
+(
+    const dictionary& viscosityProperties
+)
+{
+    viscosityModel::read(viscosityProperties);
+
+    muICoeffs_ = viscosityProperties.optionalSubDict(typeName + "Coeffs");
+
+    readCoeffs();
+
+    return true;
+}
+
+
+// ************************************************************************* //

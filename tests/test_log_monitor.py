@@ -1,0 +1,94 @@
+"""The log monitor: step table and divergence detection on real-format lines."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from foamsilo.run import LogMonitor
+
+STEP = """Courant Number mean: {co_mean} max: {co}
+Interface Courant Number mean: 0.01 max: {aco}
+Granular Courant Number max: {gco}
+deltaT = {dt}
+Time = {t}
+
+PIMPLE: iteration 1
+smoothSolver:  Solving for alpha.granular, Initial residual = 1e-05, Final residual = 1e-12, No Iterations 1
+DILUPBiCGStab:  Solving for Ux, Initial residual = {ru}, Final residual = 1e-09, No Iterations 3
+DILUPBiCGStab:  Solving for Uy, Initial residual = 0.001, Final residual = 1e-09, No Iterations 3
+GAMG:  Solving for p_rgh, Initial residual = {rp}, Final residual = 5e-08, No Iterations 9
+time step continuity errors : sum local = 1e-09, global = 1e-10, cumulative = 1e-08
+ExecutionTime = {ex} s  ClockTime = 1 s
+"""
+
+
+def feed_steps(mon, n, **kw):
+    t = 0.0
+    for i in range(n):
+        dt = kw.get("dt", 1e-4)
+        t += dt
+        vals = dict(
+            co_mean=0.1, co=0.4, aco=0.2, gco=0.3, dt=dt, t=t, ru=0.01, rp=0.1, ex=0.01 * (i + 1)
+        )
+        vals.update({k: v for k, v in kw.items() if k != "dt"})
+        for line in STEP.format(**vals).splitlines():
+            mon.feed(line)
+
+
+def test_steps_are_tabulated(tmp_path):
+    mon = LogMonitor(0.5, 0.5, 0.0)
+    feed_steps(mon, 30)
+    assert len(mon.steps) == 30
+    s = mon.steps[-1]
+    assert s.time == pytest.approx(30e-4) and s.delta_t == 1e-4
+    assert s.courant == 0.4 and s.interface_courant == 0.2 and s.granular_courant == 0.3
+    assert s.residuals == {"alpha.granular": 1e-05, "Ux": 0.01, "Uy": 0.001, "p_rgh": 0.1}
+    assert s.iterations["p_rgh"] == 9
+    assert s.continuity == 1e-9
+    assert mon.divergence is None
+    mon.write_table(tmp_path / "steps.csv")
+    rows = (tmp_path / "steps.csv").read_text().splitlines()
+    assert len(rows) == 31 and rows[0].startswith("time,delta_t,courant")
+
+
+def test_nan_residual_is_divergence():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 10)
+    feed_steps(mon, 1, rp="nan")
+    d = mon.divergence
+    assert d is not None and d.quantity == "p_rgh residual"
+    assert math.isclose(d.time, 1e-4)
+
+
+def test_courant_far_above_the_limit_is_divergence():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 5)
+    feed_steps(mon, 1, co=12.0)  # 24 x the limit
+    assert mon.divergence is not None and mon.divergence.quantity == "Courant number"
+    assert "12" in mon.divergence.detail
+
+
+def test_courant_above_limit_but_not_far_is_not_divergence():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 5, co=2.0)
+    assert mon.divergence is None
+
+
+def test_collapsing_time_step_is_divergence():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 30, dt=1e-4)
+    feed_steps(mon, 1, dt=1e-9)
+    assert mon.divergence is not None and mon.divergence.quantity == "deltaT"
+
+
+def test_fatal_error_is_collected_not_mistaken_for_the_banner():
+    mon = LogMonitor(0.5, 0.5)
+    mon.feed("trapFpe: Floating point exception trapping enabled (FOAM_SIGFPE).")
+    assert not mon.fatal
+    feed_steps(mon, 2)
+    mon.feed("--> FOAM FATAL ERROR: ")
+    mon.feed("    Maximum number of iterations exceeded")
+    assert mon.fatal[0].startswith("--> FOAM FATAL ERROR")
+    assert len(mon.steps) == 2

@@ -1,0 +1,126 @@
+"""Scene model: presets, derived values, validation errors naming the field."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from foamsilo.errors import SceneError
+from foamsilo.scene import (
+    apply_overrides,
+    load_preset,
+    load_scene_file,
+    preset_data,
+    preset_names,
+    reference_markdown,
+    scene_from_dict,
+    to_toml,
+)
+
+
+def test_zhou_planar_preset_has_the_paper_values():
+    s = load_preset("zhou-planar")
+    L = s.silo.width
+    assert s.silo.height == pytest.approx(4 * L)
+    assert s.silo.fill_height == pytest.approx(3.9 * L)
+    assert s.silo.orifice_width == pytest.approx(0.25 * L)
+    assert s.material.grain_diameter == pytest.approx(L / 90)
+    assert (s.material.mu_s, s.material.delta_mu, s.material.i0) == (0.4, 0.28, 0.4)
+    # eta_max = 100 rho sqrt(g L^3)
+    assert s.eta_max == pytest.approx(100 * 2500 * math.sqrt(9.81 * 0.1**3), rel=1e-12)
+    assert s.eta_max == pytest.approx(24761.361, rel=1e-7)
+    assert s.representation == "planar"
+    assert s.mesh.cells_across == 64  # the paper's resolution
+    assert s.time_scale == pytest.approx(math.sqrt(0.1 / 9.81))
+
+
+def test_overrides_are_typed_toml_literals():
+    s = load_preset(
+        "zhou-planar", ["mesh.cells_across=16", "run.end_time=0.25", "mesh.representation=planar"]
+    )
+    assert s.mesh.cells_across == 16 and isinstance(s.mesh.cells_across, int)
+    assert s.run.end_time == 0.25
+    assert s.cell_size == pytest.approx(0.1 / 16)
+
+
+def test_pressure_floor_default_and_explicit():
+    s = load_preset("zhou-planar")
+    assert s.p_min == pytest.approx(1e-4 * 2500 * 9.81 * 0.1)
+    s2 = load_preset("zhou-planar", ["material.pressure_floor=0.5"])
+    assert s2.p_min == 0.5
+
+
+@pytest.mark.parametrize(
+    ("override", "field", "allowed"),
+    [
+        ("silo.orifice_width=0.1", "silo.orifice_width", "< silo.width"),
+        ("silo.orifice_width=0.2", "silo.orifice_width", "< silo.width"),
+        ("silo.fill_height=0.41", "silo.fill_height", "<= silo.height"),
+        ("silo.width=-0.1", "silo.width", "> 0"),
+        ("silo.height=0", "silo.height", "> 0"),
+        ("material.grain_diameter=-1e-3", "material.grain_diameter", "> 0"),
+        ("material.density=0", "material.density", "> 0"),
+        ("material.mu_s=-0.1", "material.mu_s", ">= 0"),
+        ("mesh.cells_across=0", "mesh.cells_across", ">= 4"),
+        ("mesh.cells_across=6", "mesh.cells_across", "at least 2 cells across the orifice"),
+        ("mesh.cells_across=16.5", "mesh.cells_across", "integer"),
+        ("run.end_time=-1", "run.end_time", "> 0"),
+        ("silo.colour=1", "silo.colour", "allowed keys in silo"),
+        ("flavour=1", "flavour", "allowed keys"),
+        ("mesh.representation=axisymmetric", "mesh.representation", "allowed"),
+        ("silo.shape=hexagonal", "silo.shape", "'rectangular'"),
+        ("material.mu_s='a lot'", "material.mu_s", "a number"),
+        ("material.grain_diameter=0.03", "material.grain_diameter", "< silo.orifice_width"),
+    ],
+)
+def test_bad_values_name_the_field_and_the_allowed_range(override, field, allowed):
+    with pytest.raises(SceneError) as exc:
+        load_preset("zhou-planar", [override])
+    assert exc.value.field == field
+    assert allowed in str(exc.value)
+    assert str(exc.value).startswith(field)
+
+
+def test_missing_key_is_named():
+    data = preset_data("zhou-planar")
+    del data["silo"]["orifice_width"]
+    with pytest.raises(SceneError) as exc:
+        scene_from_dict(data)
+    assert exc.value.field == "silo.orifice_width"
+    assert "missing" in str(exc.value)
+
+
+def test_exactly_one_viscosity_cap():
+    data = apply_overrides(preset_data("zhou-planar"), ["material.viscosity_cap=1000"])
+    with pytest.raises(SceneError, match="exactly one"):
+        scene_from_dict(data)
+    del data["material"]["viscosity_cap_scaled"]
+    assert scene_from_dict(data).eta_max == 1000
+
+
+def test_scene_file_roundtrip(tmp_path):
+    s = load_preset("zhou-planar")
+    p = tmp_path / "s.toml"
+    p.write_text(to_toml(s.to_dict()))
+    assert load_scene_file(p) == s
+
+
+def test_unknown_preset_lists_the_allowed_ones():
+    with pytest.raises(SceneError) as exc:
+        load_preset("no-such-silo")
+    assert "zhou-planar" in str(exc.value)
+
+
+def test_reference_covers_every_field():
+    md = reference_markdown()
+    for key in (
+        "orifice_width",
+        "fill_height",
+        "viscosity_cap_scaled",
+        "cells_across",
+        "max_granular_courant",
+        "pressure_floor",
+    ):
+        assert f"`{key}`" in md
+    assert "zhou-planar" in preset_names()

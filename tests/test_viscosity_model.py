@@ -1,0 +1,110 @@
+"""The mu(I) viscosity model in the real solver, on a prescribed shear field.
+
+One frozen-flow step of siloFoam (U and p held, the mixture viscosity
+evaluated) on the coarse planar mesh.  U = (g0 y, 0, 0) is uniform shear
+(|gammaDot| = g0 exactly under Gauss-linear gradients); the granular
+pressure is set to vary over 8.5 decades across the width, so that the
+row of cells covers the pressure floor, the whole mu(I) curve and the cap.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+from foamsilo.case import create_case
+from foamsilo.foam import read_internal_field, run_utility, write_internal_field
+
+from .conftest import coarse_planar
+
+pytestmark = pytest.mark.openfoam
+
+G0 = 10.0  # 1/s
+
+
+def _set(path, key, value):
+    text = path.read_text()
+    text, n = re.subn(
+        r"^(\s*" + re.escape(key) + r"\s+)[^;]+;", r"\g<1>" + value + ";", text, count=1, flags=re.M
+    )
+    assert n == 1, key
+    path.write_text(text)
+
+
+def mu_i_nu(p, shear, d, rho, mus, dmu, i0, eta_max, p_min):
+    """Reference implementation of Zhou et al. eq. 9 with the cap and floor."""
+    pp = np.maximum(p, p_min)
+    inertial = shear * d / np.sqrt(pp / rho)
+    mu = mus + dmu / (i0 / inertial + 1)
+    return np.minimum(mu * pp / shear, eta_max) / rho
+
+
+def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
+    scene = coarse_planar()
+    case = create_case(scene, tmp_path / "visc", openfoam).path
+    cd = case / "system" / "controlDict"
+    for k, v in [
+        ("writeFormat", "ascii"),
+        ("deltaT", "1e-7"),
+        ("adjustTimeStep", "no"),
+        ("endTime", "1e-7"),
+        ("writeControl", "timeStep"),
+        ("writeInterval", "1"),
+    ]:
+        _set(cd, k, v)
+    fs = case / "system" / "fvSolution"
+    fs.write_text(
+        fs.read_text().replace(
+            "momentumPredictor yes;", "momentumPredictor yes;\n    frozenFlow yes;"
+        )
+    )
+    run_utility(openfoam, case, "postProcess", "-func", "writeCellCentres", "-time", "0")
+    C = read_internal_field(case / "0" / "C")
+    x, y = C[:, 0], C[:, 1]
+    L, H = scene.silo.width, scene.silo.height
+
+    U = np.zeros_like(C)
+    U[:, 0] = G0 * y
+    write_internal_field(case / "0" / "U", U)
+    # grains everywhere, and p_rgh = p_target - rho g (hRef - y) so that the
+    # solver's p = p_rgh + rho gh is p_target (its written p is used below)
+    rho = scene.material.density
+    shutil.copy(case / "0.orig" / "alpha.granular", case / "0")  # ASCII template
+    write_internal_field(case / "0" / "alpha.granular", np.ones(len(C)))
+    p_target = 10 ** (-1.5 + 8.5 * x / L)
+    gh = scene.gravity * (scene.silo.fill_height - y)
+    write_internal_field(case / "0" / "p_rgh", p_target - rho * gh)
+
+    run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    t = case / "1e-07"
+    nu = read_internal_field(t / "nu1")
+    p = read_internal_field(t / "p")
+    assert np.allclose(read_internal_field(t / "U"), U)  # frozen
+    assert np.allclose(p, p_target, rtol=1e-6, atol=1e-6)
+
+    m = scene.material
+    expected = mu_i_nu(
+        p, G0, m.grain_diameter, m.density, m.mu_s, m.delta_mu, m.i0, scene.eta_max, scene.p_min
+    )
+    dx = scene.cell_size
+    # away from the side walls (no-slip breaks the uniform shear there) and
+    # the top and bottom boundaries
+    inner = (x > dx) & (x < L - dx) & (y > dx) & (y < H - dx)
+    assert inner.sum() > 500
+    np.testing.assert_allclose(nu[inner], expected[inner], rtol=1e-6)
+
+    eta = nu[inner] * m.density
+    pp = p[inner]
+    inertial = G0 * m.grain_diameter / np.sqrt(np.maximum(pp, scene.p_min) / m.density)
+    # the test covers: the cap ...
+    assert np.sum(np.isclose(eta, scene.eta_max, rtol=1e-9)) > 20
+    # ... the pressure floor ...
+    assert np.sum(pp < scene.p_min) > 20
+    # ... and the rising part of mu(I) (I above I0/4, mu well above mu_s)
+    mu_eff = eta * G0 / np.maximum(pp, scene.p_min)
+    rising = inertial > 0.1
+    assert rising.sum() > 20 and np.all(mu_eff[rising] > m.mu_s + 0.05)
+    assert mu_eff.max() < m.mu_s + m.delta_mu
