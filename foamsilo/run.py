@@ -21,6 +21,7 @@ import csv
 import math
 import os
 import re
+import resource
 import shlex
 import sys
 import time
@@ -347,6 +348,7 @@ def run_solver(
     saved = dict(os.environ)
     os.environ.clear()
     os.environ.update(of.runtime_env())
+    usage0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     try:
         # 'exec' makes the solver the process PyFoam signals (not a shell);
@@ -359,11 +361,14 @@ def run_solver(
         )
         with contextlib.redirect_stdout(sys.stderr):
             data = runner.start()
+            runner.run.join()  # the solver process is reaped: its rusage is final
     finally:
         os.environ.clear()
         os.environ.update(saved)
         log.close()
     wall = time.perf_counter() - t0
+    usage1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
     monitor.write_table(case / STEP_TABLE)
     rss = data.get("usedMemory")
 
@@ -381,7 +386,7 @@ def run_solver(
         end_time=monitor.current_time or start_time,
         steps=len(monitor.steps),
         wall_seconds=wall,
-        cpu_seconds=float(data.get("cpuTime") or wall),
+        cpu_seconds=cpu,
         max_rss_mb=float(rss) if rss else None,
     )
 

@@ -136,7 +136,9 @@ class Scene:
     run: Run = _f("run control")
     description: str = _f("one-line description", default="")
     air: Air = _f("gas phase", default=Air())
-    gravity: float = _f("gravitational acceleration |g|", "m/s^2", gt=0, le=100, default=GRAVITY)
+    gravity: float = _f(
+        "magnitude of the gravitational acceleration", "m/s^2", gt=0, le=100, default=GRAVITY
+    )
 
     # ------------------------------------------------------------------ derived
     @property
@@ -454,7 +456,7 @@ def reference_markdown() -> str:
             else:
                 allowed = _describe_range(meta) or "-"
             if f.default is not dataclasses.MISSING:
-                default = "-" if f.default is None else f"`{f.default}`"
+                default = "-" if f.default in (None, "") else f"`{f.default}`"
             else:
                 default = "required"
             rows.append(

@@ -124,3 +124,12 @@ def test_reference_covers_every_field():
     ):
         assert f"`{key}`" in md
     assert "zhou-planar" in preset_names()
+
+
+def test_committed_scene_reference_is_current():
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parent.parent / "docs" / "scene-reference.md"
+    assert doc.read_text().strip() == reference_markdown().strip(), (
+        "docs/scene-reference.md is stale: foamsilo scene-reference > docs/scene-reference.md"
+    )
