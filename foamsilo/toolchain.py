@@ -171,7 +171,10 @@ def find_openfoam() -> OpenFOAM:
         When neither is there, with the command that installs it.
     """
     wm_dir = os.environ.get("WM_PROJECT_DIR")
-    if wm_dir and Path(wm_dir).is_dir():
+    # Sourcing Debian's own etc/bashrc sets WM_PROJECT_DIR to its etc tree,
+    # which has no headers: that is still the Debian package
+    debian_env = wm_dir is not None and Path(wm_dir).resolve() == DEBIAN_ETC.resolve()
+    if wm_dir and Path(wm_dir).is_dir() and not debian_env:
         appbin = Path(os.environ.get("FOAM_APPBIN", Path(wm_dir) / "bin"))
         if not (appbin / "interFoam").exists():
             found = shutil.which("interFoam")

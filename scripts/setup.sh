@@ -12,6 +12,9 @@
 # A second run skips everything that is done and returns within seconds.
 set -euo pipefail
 
+# Debian's own etc/bashrc sets WM_PROJECT_DIR without headers: not a user build
+if [ "${WM_PROJECT_DIR:-}" = /usr/share/openfoam ]; then unset WM_PROJECT_DIR; fi
+
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cache=${FOAMSILO_CACHE:-$HOME/.cache/foamsilo}
 say() { printf '[foamsilo setup] %s\n' "$*" >&2; }
