@@ -85,6 +85,7 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "air": scene.air,
         "mesh": scene.mesh,
         "run": scene.run,
+        "numerics": scene.numerics,
         "gravity": scene.gravity,
         "representation": rep,
         "solver": SOLVER_NAME,

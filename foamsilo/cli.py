@@ -449,6 +449,63 @@ def cmd_post(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_bench(args: argparse.Namespace) -> int:
+    """Run a benchmark and append its result to the log in docs/."""
+    from foamsilo.bench import bench_solver, solver_table, write_result
+
+    if args.suite == "report":
+        from foamsilo.bench import read_log, solver_report
+
+        text = solver_report(read_log(Path(args.log)))
+        if args.output:
+            Path(args.output).write_text(text + "\n")
+        _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
+        return 0
+    cells = [int(c) for c in args.cells]
+    with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
+        work = Path(args.work_dir) if args.work_dir else Path(tmp)
+        result = bench_solver(
+            cells,
+            args.end_time,
+            work,
+            overrides=args.set,
+            reference=not args.no_reference,
+            keep=args.work_dir is not None,
+        )
+    result["label"] = args.label
+    if args.log:
+        write_result(result, Path(args.log))
+
+    def human() -> None:
+        con = _console()
+        m = result["machine"]
+        con.print(
+            f"solver benchmark ({args.label or 'current'}), {m['cpu']} x{m['cores']}, "
+            f"commit {result['commit']}, end time {args.end_time} s"
+        )
+        con.print(solver_table(result))
+
+    _emit(args, {"ok": True, **result}, human)
+    return 0
+
+
+def cmd_analytic(args: argparse.Namespace) -> int:
+    """Evaluate an analytic law (``foamsilo analytic FORM ...``)."""
+    payload = args.analytic(args)
+
+    def human() -> None:
+        con = _console()
+        for k, v in payload.items():
+            if isinstance(v, list) and len(v) > 8:
+                v = f"[{len(v)} values: {v[0]:.6g} ... {v[-1]:.6g}]" if v else "[]"
+            elif isinstance(v, float):
+                v = f"{v:.6g}"
+            con.print(f"{k:>20}: {v}")
+
+    _emit(args, {"ok": True, **payload}, human)
+    return 0
+
+
 def cmd_scene_reference(args: argparse.Namespace) -> int:
     """Print the scene-file reference (Markdown)."""
     from foamsilo.scene import reference_markdown
@@ -532,6 +589,37 @@ def build_parser() -> argparse.ArgumentParser:
         "--if-needed", action="store_true", help="only if the sources changed"
     )
     add("scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
+
+    from foamsilo.analytic.cli import register
+
+    def add_json(sp: Any) -> None:
+        sp.add_argument("--json", action="store_true", help="one JSON object on stdout")
+        sp.set_defaults(func=cmd_analytic)
+
+    register(sub, add_json)
+
+    sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
+    sp.add_argument(
+        "suite", choices=["solver", "report"], help="which benchmark (report: tables from --log)"
+    )
+    sp.add_argument("-o", "--output", help="report: write the Markdown here")
+    sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")
+    sp.add_argument("--end-time", type=float, default=1.0, help="simulated time per run [s]")
+    sp.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        default=[],
+        help="scene override applied to every run (a lever to measure)",
+    )
+    sp.add_argument("--label", default="", help="name of this configuration in the log")
+    sp.add_argument(
+        "--log",
+        default="docs/benchmarks/solver.jsonl",
+        help="JSON-lines log the result is appended to ('' for none)",
+    )
+    sp.add_argument("--no-reference", action="store_true", help="skip the interFoam reference")
+    sp.add_argument("--work-dir", help="keep the cases here")
     return p
 
 

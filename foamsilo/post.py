@@ -119,6 +119,7 @@ class Discharge:
     initial_volume: float
     density: float
     depth: float
+    top_flux: np.ndarray | None = None
 
     @property
     def mass_flow(self) -> np.ndarray:
@@ -126,9 +127,17 @@ class Discharge:
         return self.density * self.volume_flux
 
     @property
+    def top_loss(self) -> float:
+        """Granular volume that left through the open top, over V0."""
+        if self.top_flux is None:
+            return 0.0
+        return float(np.sum(self.top_flux * self.delta_t) / self.initial_volume)
+
+    @property
     def mass_balance_error(self) -> float:
-        """Maximum of |V(t) + outflow(0..t) - V0| / V0 over the run."""
-        out = np.cumsum(self.volume_flux * self.delta_t)
+        """Maximum of |V(t) + outflow(0..t) - V0| / V0 (orifice and top) over the run."""
+        flux = self.volume_flux + (self.top_flux if self.top_flux is not None else 0.0)
+        out = np.cumsum(flux * self.delta_t)
         return float(np.max(np.abs(self.volume + out - self.initial_volume)) / self.initial_volume)
 
 
@@ -145,8 +154,13 @@ def read_discharge(case: Path, scene: Scene) -> Discharge:
     depth = scene.cell_size if scene.representation == "planar" else 1.0
     q = flux[:, 1] / depth
     v = vol[:, 1] / depth
-    v0 = float(v[0] + q[0] * dt[0])
-    return Discharge(t, dt, q, v, v0, scene.material.density, depth)
+    top = None
+    if (Path(case) / "postProcessing" / "topFlow").is_dir():
+        _, tf = read_function_object(case, "topFlow")
+        if len(tf) >= n and np.allclose(tf[:n, 0], t, rtol=1e-9, atol=1e-12):
+            top = tf[:n, 1] / depth
+    v0 = float(v[0] + (q[0] + (top[0] if top is not None else 0.0)) * dt[0])
+    return Discharge(t, dt, q, v, v0, scene.material.density, depth, top)
 
 
 @dataclass
@@ -347,6 +361,7 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
         "flux_vs_volume_rel_diff": (abs(st.q - st.q_from_volume) / st.q if st.steady else None),
         "drift": st.drift if st.steady else None,
         "mass_balance_rel_error": d.mass_balance_error,
+        "lost_through_top_rel": d.top_loss,
         "flow_rate_scale": {"name": "rho sqrt(g L^3)", "value": scale},
         "reference": {
             "source": "Zhou et al. 2019, sec. III.B (open top), converged continuum rate",

@@ -106,6 +106,20 @@ class Mesh:
         "planar (one cell thick), axisymmetric (wedge), 3d, or auto (cheapest faithful)",
         default="auto",
     )
+    top_cell_ratio: float = _f(
+        "height of the topmost cell over the cell width; cells grow geometrically above "
+        "fine_height (1: uniform mesh)",
+        "",
+        ge=1,
+        le=8,
+        default=3.0,
+    )
+    fine_height: float | None = _f(
+        "height up to which cells stay square when graded; default: the silo width",
+        "m",
+        gt=0,
+        default=None,
+    )
 
 
 @dataclass(frozen=True)
@@ -121,8 +135,35 @@ class Run:
     max_granular_courant: float = _f(
         "Courant number limit over the grains only (0: not used)", "", ge=0, le=10, default=0.0
     )
-    max_delta_t: float = _f("largest time step", "s", gt=0, default=1e-3)
+    max_delta_t: float | None = _f(
+        "largest time step (a safety net; the Courant limits set the step); default 0.05 sqrt(L/g)",
+        "s",
+        gt=0,
+        default=None,
+    )
     n_procs: int = _f("MPI ranks (1: serial)", ge=1, le=4096, default=1)
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """Linear solvers and scheme switches (defaults measured in docs/benchmarks)."""
+
+    u_rel_tol: float = _f(
+        "relative tolerance of the momentum predictor solve (0: solve to u_tolerance)",
+        "",
+        ge=0,
+        lt=1,
+        default=0.01,
+    )
+    u_tolerance: float = _f("absolute tolerance of the momentum solve", "", gt=0, default=1e-9)
+    p_tolerance: float = _f("absolute tolerance of the pressure solve", "", gt=0, default=1e-7)
+    cache_gradients: bool = _f(
+        "compute grad(U) once per step for the rheology and the stress", default=True
+    )
+    ddt_correction: bool = _f(
+        "Rhie-Chow ddtCorr in the projection (off: more robust above Courant 0.5)",
+        default=True,
+    )
 
 
 @dataclass(frozen=True)
@@ -136,6 +177,7 @@ class Scene:
     run: Run = _f("run control")
     description: str = _f("one-line description", default="")
     air: Air = _f("gas phase", default=Air())
+    numerics: Numerics = _f("linear solvers and scheme switches", default=Numerics())
     gravity: float = _f(
         "magnitude of the gravitational acceleration", "m/s^2", gt=0, le=100, default=GRAVITY
     )
@@ -158,6 +200,13 @@ class Scene:
             return m.viscosity_cap
         assert m.viscosity_cap_scaled is not None
         return m.viscosity_cap_scaled * self.rho_sqrt_gL3
+
+    @property
+    def delta_t_max(self) -> float:
+        """Largest time step [s]."""
+        if self.run.max_delta_t is not None:
+            return self.run.max_delta_t
+        return 0.05 * self.time_scale
 
     @property
     def p_min(self) -> float:
@@ -266,6 +315,10 @@ def _convert(name: str, value: Any, typ: Any, meta: dict[str, Any]) -> Any:
     if args and type(None) in args:  # Optional[X]
         inner = [a for a in args if a is not type(None)][0]
         return _convert(name, value, inner, meta)
+    if typ is bool:
+        if not isinstance(value, bool):
+            raise SceneError(name, f"got {value!r}; allowed: true, false")
+        return value
     if typ in (int, float):
         return _check_number(name, value, typ, meta)
     if typ is str:
@@ -307,6 +360,11 @@ def _validate(scene: Scene) -> None:
             "mesh.cells_across",
             f"got {me.cells_across}: the orifice spans {cells_in_orifice:.2f} cells; "
             f"allowed: >= {need} (at least 2 cells across the orifice)",
+        )
+    if me.fine_height is not None and me.fine_height >= s.height:
+        raise SceneError(
+            "mesh.fine_height",
+            f"got {me.fine_height:g} m; allowed: > 0 and < silo.height ({s.height:g} m)",
         )
     if s.fill_height < 2 * scene.cell_size:
         raise SceneError(
@@ -456,7 +514,10 @@ def reference_markdown() -> str:
             else:
                 allowed = _describe_range(meta) or "-"
             if f.default is not dataclasses.MISSING:
-                default = "-" if f.default in (None, "") else f"`{f.default}`"
+                if isinstance(f.default, bool):
+                    default = f"`{str(f.default).lower()}`"
+                else:
+                    default = "-" if f.default in (None, "") else f"`{f.default}`"
             else:
                 default = "required"
             rows.append(

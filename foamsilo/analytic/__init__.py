@@ -12,4 +12,11 @@ from foamsilo.analytic.beverloo import (
     beverloo_2d_constant,
 )
 
-__all__ = ["ZHOU_PLANAR_Q", "ZHOU_PLANAR_Q_SPREAD", "beverloo_2d", "beverloo_2d_constant"]
+__all__ = [
+    "ZHOU_PLANAR_Q",
+    "ZHOU_PLANAR_Q_SPREAD",
+    "beverloo_2d",
+    "beverloo_2d_constant",
+]
+
+# Submodules: beverloo, zhou (Table I, eqs 1-25), fit, exact, figures, cli

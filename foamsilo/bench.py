@@ -1,0 +1,303 @@
+"""Benchmarks: solver cost and accuracy, written as tables into ``docs/``.
+
+``foamsilo bench solver`` runs the planar silo of Zhou et al. (sec. III.B)
+at several resolutions, from fill to ``end_time``, and reports per run:
+CPU seconds per simulated second, milliseconds per step, steps per
+simulated second, cell-steps per CPU second, peak memory, the steady Q and
+the mass balance.  In the same run it times one step of stock ``interFoam``
+with a Newtonian fluid on the same mesh, so that figures taken on different
+days (or machines) can be compared as ratios.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import re
+import shutil
+import subprocess
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from foamsilo import __version__
+from foamsilo.case import create_case
+from foamsilo.post import summarize
+from foamsilo.run import run_solver
+from foamsilo.scene import load_preset
+from foamsilo.solver import ensure_solver
+from foamsilo.toolchain import OpenFOAM, find_openfoam
+
+REFERENCE_STEPS = 60
+
+
+@dataclass
+class SolverBenchRow:
+    """One benchmark run."""
+
+    cells_across: int
+    cells: int
+    simulated_s: float
+    steps: int
+    cpu_s: float
+    wall_s: float
+    cpu_s_per_simulated_s: float
+    ms_per_step: float
+    steps_per_simulated_s: float
+    cell_steps_per_cpu_s: float
+    peak_memory_mb: float | None
+    q_dimensionless: float | None
+    q_from_volume_dimensionless: float | None
+    mass_balance_rel_error: float
+    interfoam_ms_per_step: float | None
+    ratio_to_interfoam: float | None
+
+
+def machine_info() -> dict[str, Any]:
+    """Where a benchmark ran."""
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "foamsilo": __version__,
+        "date": time.strftime("%Y-%m-%d"),
+    }
+
+
+def _git_commit() -> str | None:
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            cwd=Path(__file__).parent,
+            timeout=10,
+        )
+        commit = out.stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            cwd=Path(__file__).parent,
+            timeout=10,
+        ).stdout.strip()
+        return (commit + ("-dirty" if dirty else "")) or None
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def _set_entry(path: Path, key: str, value: str) -> None:
+    text = path.read_text()
+    text, n = re.subn(
+        r"^(\s*" + re.escape(key) + r"\s+)[^;]+;", r"\g<1>" + value + ";", text, count=1, flags=re.M
+    )
+    if n != 1:
+        raise ValueError(f"{key} not in {path}")
+    path.write_text(text)
+
+
+def interfoam_ms_per_step(
+    case: Path, of: OpenFOAM, delta_t: float, steps: int = REFERENCE_STEPS
+) -> float:
+    """Time one step of stock interFoam, Newtonian fluid, on ``case``'s mesh.
+
+    The granular phase is replaced by a Newtonian fluid of the same density
+    and kinematic viscosity 1e-6 m^2/s; the run starts from the initial fill
+    with a fixed time step.  The first tenth of the steps is not counted.
+    """
+    ref = case.parent / f"{case.name}.interFoam"
+    if ref.exists():
+        shutil.rmtree(ref)
+    ref.mkdir()
+    for d in ("system", "constant"):
+        shutil.copytree(case / d, ref / d)
+    shutil.copytree(case / "0", ref / "0")
+    tp = ref / "constant" / "transportProperties"
+    text = re.sub(r"muICoeffs\s*\{[^}]*\}", "nu              1e-06;", tp.read_text())
+    tp.write_text(re.sub(r"transportModel\s+muI;", "transportModel  Newtonian;", text))
+    fs = ref / "system" / "fvSolution"
+    fs.write_text(
+        fs.read_text().replace(
+            "solvers\n{",
+            'solvers\n{\n    "pcorr.*"\n    {\n        solver PCG;\n        preconditioner DIC;\n'
+            "        tolerance 1e-8;\n        relTol 0;\n    }\n",
+            1,
+        )
+    )
+    cd = ref / "system" / "controlDict"
+    cd.write_text(re.sub(r"\nfunctions\s*\{.*\}\s*$", "\n", cd.read_text(), flags=re.S))
+    for k, v in [
+        ("application", "interFoam"),
+        ("adjustTimeStep", "no"),
+        ("deltaT", f"{delta_t:.6g}"),
+        ("endTime", f"{delta_t * steps:.6g}"),
+        ("writeControl", "timeStep"),
+        ("writeInterval", str(steps)),
+    ]:
+        _set_entry(cd, k, v)
+    proc = subprocess.run(
+        [str(of.appbin / "interFoam"), "-case", str(ref)],
+        env=of.runtime_env(),
+        capture_output=True,
+        text=True,
+    )
+    times = [float(x) for x in re.findall(r"^ExecutionTime = ([\d.eE+-]+) s", proc.stdout, re.M)]
+    shutil.rmtree(ref, ignore_errors=True)
+    if proc.returncode != 0 or len(times) < steps // 2:
+        raise RuntimeError(f"interFoam reference failed:\n{proc.stdout[-2000:]}{proc.stderr}")
+    skip = max(1, len(times) // 10)
+    return 1000 * (times[-1] - times[skip - 1]) / (len(times) - skip)
+
+
+def bench_solver(
+    cells: list[int],
+    end_time: float,
+    work_dir: Path,
+    overrides: list[str] | None = None,
+    reference: bool = True,
+    keep: bool = False,
+) -> dict[str, Any]:
+    """Run the solver benchmark on the planar silo.
+
+    Parameters
+    ----------
+    cells
+        Resolutions (cells across L).
+    end_time
+        Simulated time of each run [s].
+    work_dir
+        Where the cases are written.
+    overrides
+        Extra ``--set`` scene overrides (a lever to measure).
+    reference
+        Also time stock interFoam on the same mesh.
+    keep
+        Keep the cases.
+    """
+    of = find_openfoam()
+    solver = ensure_solver(of=of)
+    rows = []
+    for n in cells:
+        scene = load_preset(
+            "zhou-planar",
+            [
+                f"mesh.cells_across={n}",
+                f"run.end_time={end_time}",
+                f"run.write_interval={end_time / 4}",
+            ]
+            + list(overrides or []),
+        )
+        case_dir = Path(work_dir) / f"planar-{n}"
+        case = create_case(scene, case_dir, of, overwrite=True)
+        result = run_solver(case.path, of, solver)
+        summary = summarize(case.path, result.as_dict())
+        ref_ms = None
+        ms = 1000 * result.cpu_seconds / result.steps
+        if reference:
+            ref_ms = interfoam_ms_per_step(case.path, of, delta_t=end_time / result.steps)
+        rows.append(
+            SolverBenchRow(
+                cells_across=n,
+                cells=case.mesh.cells if case.mesh else 0,
+                simulated_s=result.end_time - result.start_time,
+                steps=result.steps,
+                cpu_s=result.cpu_seconds,
+                wall_s=result.wall_seconds,
+                cpu_s_per_simulated_s=result.cpu_seconds / (result.end_time - result.start_time),
+                ms_per_step=ms,
+                steps_per_simulated_s=result.steps / (result.end_time - result.start_time),
+                cell_steps_per_cpu_s=(case.mesh.cells if case.mesh else 0)
+                * result.steps
+                / result.cpu_seconds,
+                peak_memory_mb=result.max_rss_mb,
+                q_dimensionless=summary["Q_dimensionless"],
+                q_from_volume_dimensionless=summary["Q_from_volume_dimensionless"],
+                mass_balance_rel_error=summary["mass_balance_rel_error"],
+                interfoam_ms_per_step=ref_ms,
+                ratio_to_interfoam=ms / ref_ms if ref_ms else None,
+            )
+        )
+        if not keep:
+            shutil.rmtree(case.path, ignore_errors=True)
+    return {
+        "benchmark": "solver",
+        "scene": "zhou-planar",
+        "end_time_s": end_time,
+        "overrides": list(overrides or []),
+        "machine": machine_info(),
+        "commit": _git_commit(),
+        "rows": [asdict(r) for r in rows],
+    }
+
+
+def solver_table(result: dict[str, Any]) -> str:
+    """Markdown table of a solver benchmark."""
+
+    def f(v: Any, fmt: str) -> str:
+        return "-" if v is None else format(v, fmt)
+
+    lines = [
+        "| cells across | cells | steps | CPU-s / sim-s | ms / step | steps / sim-s "
+        "| cell-steps / CPU-s | peak MB | Q/(ρ√(gL³)) | from volume | mass balance "
+        "| interFoam ms / step | ratio |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in result["rows"]:
+        lines.append(
+            f"| {r['cells_across']} | {r['cells']} | {r['steps']} "
+            f"| {f(r['cpu_s_per_simulated_s'], '.1f')} | {f(r['ms_per_step'], '.2f')} "
+            f"| {f(r['steps_per_simulated_s'], '.0f')} | {f(r['cell_steps_per_cpu_s'], '.3g')} "
+            f"| {f(r['peak_memory_mb'], '.0f')} | {f(r['q_dimensionless'], '.4f')} "
+            f"| {f(r['q_from_volume_dimensionless'], '.4f')} "
+            f"| {f(r['mass_balance_rel_error'], '.1e')} "
+            f"| {f(r['interfoam_ms_per_step'], '.2f')} | {f(r['ratio_to_interfoam'], '.1f')} |"
+        )
+    return "\n".join(lines)
+
+
+def write_result(result: dict[str, Any], path: Path) -> None:
+    """Append a benchmark result to a JSON-lines log (whole lines only)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as fh:
+        fh.write(json.dumps(result) + "\n")
+
+
+def read_log(path: Path) -> list[dict[str, Any]]:
+    """All results of a JSON-lines benchmark log, oldest first."""
+    if not Path(path).exists():
+        return []
+    return [json.loads(ln) for ln in Path(path).read_text().splitlines() if ln.strip()]
+
+
+def solver_report(results: list[dict[str, Any]]) -> str:
+    """Markdown report of solver benchmark results: one table per configuration."""
+    out = ["<!-- generated by `foamsilo bench report`; do not edit -->", ""]
+    for r in results:
+        m = r["machine"]
+        cmd = "foamsilo bench solver --cells " + " ".join(
+            str(row["cells_across"]) for row in r["rows"]
+        )
+        cmd += f" --end-time {r['end_time_s']:g}"
+        cmd += "".join(f" --set {o}" for o in r.get("overrides", []))
+        out += [
+            f"### {r.get('label') or 'unlabelled'}",
+            "",
+            f"`{cmd}`  ",
+            f"{m['date']}, commit {r.get('commit')}, {m['cpu']} ({m['cores']} cores), "
+            f"one core per run, foamsilo {m['foamsilo']}",
+            "",
+            solver_table(r),
+            "",
+        ]
+    return "\n".join(out)
