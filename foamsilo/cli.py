@@ -406,15 +406,21 @@ def cmd_run(args: argparse.Namespace) -> int:
         scene, text = _load(args.scene, args.set)
         case_dir = Path(args.output or DEFAULT_RUNS_DIR / scene.name).resolve()
         reuse = False
+        replace = args.overwrite
         if _is_case_dir(case_dir) and not args.overwrite:
             if read_metadata(case_dir).get("scene_digest") != scene_digest(scene):
-                raise FoamsiloError(
-                    f"{case_dir} holds a case of a different scene (use --overwrite or -o)"
-                )
-            reuse = True
+                if not args.update:
+                    raise FoamsiloError(
+                        f"{case_dir} holds a case of a different scene "
+                        "(use --update to replace it, --overwrite, or another -o)"
+                    )
+                say(f"{case_dir} holds an older version of the scene: replacing it")
+                replace = True
+            else:
+                reuse = True
         if not reuse:
             say(f"writing case {case_dir}")
-            create_case(scene, case_dir, of, overwrite=args.overwrite, scene_text=text)
+            create_case(scene, case_dir, of, overwrite=replace, scene_text=text)
         else:
             say(f"using existing case {case_dir}")
     run_info = None
@@ -576,6 +582,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sp.add_argument("-o", "--output", help=f"case directory (default {DEFAULT_RUNS_DIR}/<name>)")
     sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--update",
+        action="store_true",
+        help="replace the case if it holds another scene; reuse it if it holds this one",
+    )
     sp.add_argument(
         "--rerun", action="store_true", help="run the solver even if the case already finished"
     )

@@ -45,6 +45,8 @@ SUMMARY_JSON = "summary.json"
 STEADY_TOLERANCE = 0.02
 #: Largest relative drift of Q over the window still called steady
 STEADY_MAX_DRIFT = 0.03
+#: Largest excursion of the smoothed Q from its mean still called steady
+STEADY_MAX_EXCURSION = 0.05
 #: Window ends when the equivalent fill height drops below this many L
 LOW_FILL = 0.5
 
@@ -181,6 +183,8 @@ class SteadyState:
         Relative change of Q over the window (linear fit).
     reason
         Why it is not steady, when it is not.
+    excursion
+        Largest deviation of the smoothed rate from its mean in the window.
     """
 
     steady: bool
@@ -191,6 +195,7 @@ class SteadyState:
     q_from_volume: float
     drift: float
     reason: str = ""
+    excursion: float = math.nan
 
 
 def _smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
@@ -221,17 +226,23 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     idx = np.flatnonzero(usable)
     i1 = idx[-1]
     tt, qq = t[: i1 + 1], q[: i1 + 1]
-    smooth = _smooth(tt, qq, 0.5 * T)
+    width = 0.5 * T
+    smooth = _smooth(tt, qq, width)
     later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
     q_ref = float(np.median(qq[later]))
-    off = np.flatnonzero((np.abs(smooth - q_ref) > STEADY_TOLERANCE * abs(q_ref)) & (tt > 0))
-    i0 = max(int(off[-1]) + 1 if off.size else idx[0], idx[0])
+    # the window opens when the smoothed rate first comes within the band of
+    # the plateau (the end of the start-up transient)
+    near = np.flatnonzero(
+        (np.abs(smooth - q_ref) <= STEADY_TOLERANCE * abs(q_ref)) & (tt >= tt[idx[0]])
+    )
+    i0 = int(near[0]) if near.size else i1
     win = slice(i0, i1 + 1)
     tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
     if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:
         nan.reason = (
-            f"no stationary regime: Q stayed within {STEADY_TOLERANCE:.0%} of its plateau for "
-            f"{(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(L/g) only (need >= 1)"
+            f"no stationary regime: the rate reached its plateau (within {STEADY_TOLERANCE:.0%})"
+            f" only {(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(L/g) before the end "
+            "(need >= 1)"
         )
         nan.t_start, nan.t_end = float(t[i0]) if i0 < len(t) else math.nan, float(t[i1])
         return nan
@@ -240,9 +251,25 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     slope = np.polyfit(tw, qw, 1)[0]
     drift = float(slope * (tw[-1] - tw[0]) / mean) if mean else math.nan
     q_vol = float(-np.polyfit(tw, vw, 1)[0] * d.density)
-    steady = abs(drift) < STEADY_MAX_DRIFT
-    reason = "" if steady else f"Q drifts by {drift:.1%} over the window"
-    return SteadyState(steady, float(tw[0]), float(tw[-1]), mean, std, q_vol, drift, reason)
+    # largest excursion of the smoothed rate, where its window is complete
+    complete = (tt >= tw[0]) & (tt <= tt[-1] - width / 2)
+    band = float(np.max(np.abs(smooth[complete] - mean)) / mean) if complete.any() else 0.0
+    reasons = []
+    if abs(drift) >= STEADY_MAX_DRIFT:
+        reasons.append(f"Q drifts by {drift:.1%} over the window")
+    if band >= STEADY_MAX_EXCURSION:
+        reasons.append(f"the smoothed rate wanders by {band:.1%}")
+    return SteadyState(
+        not reasons,
+        float(tw[0]),
+        float(tw[-1]),
+        mean,
+        std,
+        q_vol,
+        drift,
+        "; ".join(reasons),
+        band,
+    )
 
 
 def write_discharge_csv(d: Discharge, scene: Scene, path: Path) -> None:
@@ -360,6 +387,7 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
         "Q_from_volume_dimensionless": st.q_from_volume / scale if st.steady else None,
         "flux_vs_volume_rel_diff": (abs(st.q - st.q_from_volume) / st.q if st.steady else None),
         "drift": st.drift if st.steady else None,
+        "excursion": st.excursion if st.steady else None,
         "mass_balance_rel_error": d.mass_balance_error,
         "lost_through_top_rel": d.top_loss,
         "flow_rate_scale": {"name": "rho sqrt(g L^3)", "value": scale},

@@ -25,6 +25,10 @@ Description
     - The time step can be limited by the Courant number over the granular
       phase only (maxGranularCo), since the air above the free surface
       carries spurious fast velocities (granularCourantNo.H, setDeltaT.H).
+    - Optional gas coupling (Zhou et al. 2019): a Darcy-Forchheimer pore
+      pressure pf with the top condition of their eq. 16, whose gradient
+      acts on the grains (createPorePressure.H, pfEqn.H), and optional
+      quasi-2D wall friction (their eq. 14); a dry silo has neither.
     - A static mesh; no MRF, no LTS.
 
     Incompressible, isothermal; the granular phase keeps a constant
@@ -43,6 +47,7 @@ Description
 #include "pimpleControl.H"
 #include "fvOptions.H"
 #include "fvcSmooth.H"
+#include "fixedGradientFvPatchFields.H"
 
 // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
 
@@ -65,6 +70,7 @@ int main(int argc, char *argv[])
     #include "initContinuityErrs.H"
     #include "createFields.H"
     #include "createAlphaFluxes.H"
+    #include "createPorePressure.H"
 
     turbulence->validate();
 
@@ -93,6 +99,8 @@ int main(int argc, char *argv[])
             #include "alphaEqnSubCycle.H"
 
             mixture.correct();
+
+            #include "pfEqn.H"
 
             if (pimple.frozenFlow())
             {
