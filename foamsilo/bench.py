@@ -301,3 +301,48 @@ def solver_report(results: list[dict[str, Any]]) -> str:
             "",
         ]
     return "\n".join(out)
+
+
+def bench_gas(cells: int, end_time: float, work_dir: Path) -> dict[str, Any]:
+    """Cost of a time step with the pore-pressure solve against the same case dry.
+
+    The preset ``zhou-planar-gas`` (injection, Darcy) and the same scene with
+    an open top (no pore pressure), same mesh, run one after the other.
+    """
+    of = find_openfoam()
+    solver = ensure_solver(of=of)
+    rows = {}
+    for label, sets in (
+        ("dry (open top)", ['gas.mode="open-top"', "gas.q_air_scaled="]),
+        ("coupled (injection, Darcy)", []),
+        ("coupled (injection, Darcy-Forchheimer)", ["gas.inertial=true"]),
+    ):
+        scene = load_preset(
+            "zhou-planar-gas",
+            [
+                f"mesh.cells_across={cells}",
+                f"run.end_time={end_time}",
+                f"run.write_interval={end_time / 2}",
+            ]
+            + sets,
+        )
+        case = create_case(scene, Path(work_dir) / f"gas-{len(rows)}", of, overwrite=True)
+        result = run_solver(case.path, of, solver)
+        rows[label] = {
+            "steps": result.steps,
+            "cpu_s": result.cpu_seconds,
+            "ms_per_step": 1000 * result.cpu_seconds / result.steps,
+            "cells": case.mesh.cells if case.mesh else 0,
+        }
+        shutil.rmtree(case.path, ignore_errors=True)
+    dry = rows["dry (open top)"]["ms_per_step"]
+    for r in rows.values():
+        r["ratio_to_dry"] = r["ms_per_step"] / dry
+    return {
+        "benchmark": "gas",
+        "cells_across": cells,
+        "end_time_s": end_time,
+        "machine": machine_info(),
+        "commit": _git_commit(),
+        "rows": rows,
+    }

@@ -22,7 +22,7 @@ import jinja2
 
 from foamsilo import __version__
 from foamsilo.errors import FoamsiloError, MeshError
-from foamsilo.foam import set_alpha_field
+from foamsilo.foam import run_utility, set_alpha_field
 from foamsilo.mesh import MeshResult, mesh_case
 from foamsilo.scene import Scene, to_toml
 from foamsilo.solver import SOLVER_NAME
@@ -77,6 +77,9 @@ def _environment() -> jinja2.Environment:
 def template_context(scene: Scene) -> dict[str, Any]:
     """Values the templates see: the scene sections plus derived numbers."""
     rep = scene.representation
+    depth = scene.cell_size if rep == "planar" else 1.0
+    H, D = scene.silo.height, scene.silo.orifice_width
+    n_probes = 50
     return {
         "version": __version__,
         "scene": scene,
@@ -96,6 +99,17 @@ def template_context(scene: Scene) -> dict[str, Any]:
         # A start step far below the Courant limit; the controller grows it
         "initial_delta_t": 1e-3 * scene.cell_size / (scene.gravity * scene.silo.width) ** 0.5,
         "n_non_orthogonal_correctors": 0,
+        # gas coupling
+        "permeability": scene.permeability,
+        "inertial_permeability": scene.inertial_permeability,
+        # planar mesh: flow per unit depth times the cell thickness
+        "injection_flux": scene.q_air_per_depth * depth if rep == "planar" else scene.q_air,
+        # taps on the axis: dense over the first D, then up to the top
+        "axis_probes": [D * (k + 0.5) / 20 for k in range(20)]
+        + [D + (H - D) * (k + 0.5) / n_probes for k in range(n_probes)],
+        "mid_depth": 0.5 * depth if rep == "planar" else 0.0,
+        "friction_velocity": 1e-3 * (scene.gravity * scene.silo.width) ** 0.5,
+        "friction_relaxation": scene.numerics.friction_relaxation,
     }
 
 
@@ -104,6 +118,10 @@ def template_list(scene: Scene) -> list[str]:
     names = list(_COMMON)
     if scene.run.n_procs > 1:
         names.append("system/decomposeParDict")
+    if scene.gas_coupled:
+        names += ["0/pf", "constant/porePressureProperties", "system/topoSetDict"]
+    if scene.wall_friction:
+        names.append("constant/wallFrictionProperties")
     return names
 
 
@@ -222,6 +240,8 @@ def create_case(
             raise
         shutil.copytree(tmp / "0", tmp / "0.orig")  # pristine fields, before the fill
         set_alpha_field(of, tmp)
+        if scene.gas_coupled:
+            run_utility(of, tmp, "topoSet")  # the zone the pore-pressure gradient is averaged on
         meta = {
             "foamsilo_version": __version__,
             "scene": scene.name,

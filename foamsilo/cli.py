@@ -468,6 +468,22 @@ def cmd_bench(args: argparse.Namespace) -> int:
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
         return 0
     cells = [int(c) for c in args.cells]
+    if args.suite == "gas":
+        from foamsilo.bench import bench_gas
+
+        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
+            res = bench_gas(cells[0], args.end_time, Path(tmp))
+        if args.log:
+            write_result(res, Path(args.log).with_name("gas.jsonl"))
+
+        def human_gas() -> None:
+            con = _console()
+            for label, r in res["rows"].items():
+                con.print(f"{label:>40}: {r['ms_per_step']:.2f} ms/step ({r['steps']} steps), "
+                          f"ratio to dry {r['ratio_to_dry']:.2f}")  # fmt: skip
+
+        _emit(args, {"ok": True, **res}, human_gas)
+        return 0
     with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
         work = Path(args.work_dir) if args.work_dir else Path(tmp)
         result = bench_solver(
@@ -509,6 +525,32 @@ def cmd_analytic(args: argparse.Namespace) -> int:
             con.print(f"{k:>20}: {v}")
 
     _emit(args, {"ok": True, **payload}, human)
+    return 0
+
+
+def cmd_validate(args: argparse.Namespace) -> int:
+    """Reproduce a seed paper's simulations and write the report into docs/."""
+    from foamsilo.validation import gas_extremes, zhou_gas
+
+    with tempfile.TemporaryDirectory(prefix="foamsilo-validate-") as tmp:
+        work = Path(args.work_dir) if args.work_dir else Path(tmp)
+        if args.suite == "gas-extremes":
+            report = gas_extremes(args.cells, work, Path(args.output), jobs=args.jobs,
+                                  limit=args.time_limit)  # fmt: skip
+            _emit(args, {"ok": True, **report}, lambda: _console().print(
+                "\n".join(f"{r['label']}: {r['outcome']}" for r in report["rows"])))  # fmt: skip
+            return 0
+        report = zhou_gas(args.cells, work, Path(args.output), jobs=args.jobs,
+                          end_time=args.end_time)  # fmt: skip
+
+    def human() -> None:
+        _console().print(
+            f"Zhou Fig. 4b: rms difference to eq. 23 (A = 0.68) "
+            f"{report['rms_rel_diff_A068']:.1%}; Fig. 6b zone slope "
+            f"{report['fig6b_slope_zone']:.3f}; report in {args.output}/zhou-gas-planar.md"
+        )
+
+    _emit(args, {"ok": True, **report}, human)
     return 0
 
 
@@ -601,6 +643,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add("scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
 
+    sp = add("validate", cmd_validate, "reproduce a seed paper's simulations (report in docs/)")
+    sp.add_argument(
+        "suite",
+        choices=["zhou-gas", "gas-extremes"],
+        help="zhou-gas: Zhou et al. 2019 sec. III.B, Figs 4b-6b; gas-extremes: stiff and "
+        "extreme gas cases in the lab silo",
+    )
+    sp.add_argument("--time-limit", type=float, default=900.0, help="wall seconds per case")
+    sp.add_argument("--cells", type=int, default=64, help="cells across L")
+    sp.add_argument("--jobs", type=int, default=2, help="cases run at once")
+    sp.add_argument("--end-time", type=float, help="simulated time per case [s]")
+    sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
+    sp.add_argument("--work-dir", help="keep the cases here")
+
     from foamsilo.analytic.cli import register
 
     def add_json(sp: Any) -> None:
@@ -611,7 +667,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
-        "suite", choices=["solver", "report"], help="which benchmark (report: tables from --log)"
+        "suite",
+        choices=["solver", "gas", "report"],
+        help="solver: cost and accuracy; gas: pore-pressure cost against dry; "
+        "report: tables from --log",
     )
     sp.add_argument("-o", "--output", help="report: write the Markdown here")
     sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")

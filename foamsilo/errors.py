@@ -116,3 +116,26 @@ class DivergenceError(FoamsiloError):
             f"run diverged: {quantity} at {t} ({detail}); last good time directory: "
             f"{last_good_time or 'none'}; case kept in {case_dir}"
         )
+
+
+class RunTimeLimitError(FoamsiloError):
+    """A run was stopped at its wall-time limit; the case is kept.
+
+    Parameters
+    ----------
+    limit
+        The limit [s].
+    time, end_time
+        Simulated time reached and the end time aimed at [s].
+    """
+
+    def __init__(self, limit: float, time: float | None, end_time: float, case_dir: Path) -> None:
+        self.limit = limit
+        self.time = time
+        self.end_time = end_time
+        self.case_dir = case_dir
+        reached = f"{time:.6g}" if time is not None else "0"
+        super().__init__(
+            f"stopped at the wall-time limit of {limit:g} s: reached t = {reached} s of "
+            f"{end_time:g} s; case kept in {case_dir}"
+        )

@@ -69,10 +69,12 @@ def read_function_object(case: Path, name: str) -> tuple[list[str], np.ndarray]:
     columns: list[str] = []
     data = np.empty((0, 0))
     for start in starts:
-        files = sorted(start.glob("*.dat"))
+        # a rerun from the same time writes <name>_<time>.dat beside the old
+        # file: the newest one is this run's
+        files = sorted(start.glob("*.dat"), key=lambda f: f.stat().st_mtime)
         if not files:
             continue
-        lines = files[0].read_text().splitlines()
+        lines = files[-1].read_text().splitlines()
         header = [ln for ln in lines if ln.startswith("#")]
         cols = header[-1].lstrip("#").split("\t") if header else []
         cols = [c.strip() for c in cols if c.strip()]
@@ -388,6 +390,7 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
         "flux_vs_volume_rel_diff": (abs(st.q - st.q_from_volume) / st.q if st.steady else None),
         "drift": st.drift if st.steady else None,
         "excursion": st.excursion if st.steady else None,
+        "fill_height_end_m": float(d.volume[-1] / scene.silo.width),
         "mass_balance_rel_error": d.mass_balance_error,
         "lost_through_top_rel": d.top_loss,
         "flow_rate_scale": {"name": "rho sqrt(g L^3)", "value": scale},
@@ -404,6 +407,8 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
             "rel_diff": (st.q - bev) / bev if st.steady else None,
         },
     }
+    if scene.gas_coupled and st.steady:
+        summary["pore_pressure"] = _pore_pressure_summary(case, scene, d, st)
     if run_info:
         summary["run"] = run_info
     write_discharge_csv(d, scene, case / DISCHARGE_CSV)
@@ -423,3 +428,180 @@ __all__ = [
     "read_function_object",
     "summarize",
 ]
+
+
+# ------------------------------------------------------------- pore pressure
+
+
+def read_probes(case: Path, name: str, field: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Probe locations, times and values of ``postProcessing/<name>/<t0>/<field>``.
+
+    Returns
+    -------
+    locations (n, 3), times (m,), values (m, n), merged over restarts.
+    """
+    root = Path(case) / "postProcessing" / name
+    if not root.is_dir():
+        raise FoamsiloError(f"no probe output {root}")
+    locs: list[list[float]] = []
+    blocks: list[np.ndarray] = []
+    for start in sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: float(p.name)):
+        files = sorted(start.glob(f"{field}*"), key=lambda f: f.stat().st_mtime)
+        if not files:
+            continue
+        text = files[-1].read_text().splitlines()
+        locs = [
+            [float(v) for v in ln.split("(")[1].split(")")[0].split()]
+            for ln in text
+            if ln.startswith("# Probe ") and "(" in ln
+        ] or locs
+        rows = [ln.split() for ln in text if ln.strip() and not ln.startswith("#")]
+        if not rows:
+            continue
+        block = np.array([[float(x) for x in r] for r in rows if len(r) == len(rows[0])])
+        if blocks and len(block):
+            blocks = [b[b[:, 0] < block[0, 0] - 1e-12] for b in blocks]
+        blocks.append(block)
+    if not blocks:
+        raise FoamsiloError(f"probe output {root} is empty")
+    data = np.vstack(blocks)
+    return np.array(locs), data[:, 0], data[:, 1:]
+
+
+def _vector_series(case: Path, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Read the times and (n, 3) vectors of a volFieldValue of a vector field."""
+    root = Path(case) / "postProcessing" / name
+    starts = sorted((p for p in root.iterdir() if p.is_dir()), key=lambda p: float(p.name))
+    ts: list[float] = []
+    vs: list[list[float]] = []
+    for start in starts:
+        files = sorted(start.glob("*.dat"), key=lambda f: f.stat().st_mtime)
+        if not files:
+            continue
+        for ln in files[-1].read_text().splitlines():
+            if ln.startswith("#") or not ln.strip():
+                continue
+            t, rest = ln.split(None, 1)
+            vec = [float(v) for v in rest.replace("(", " ").replace(")", " ").split()[:3]]
+            if ts and float(t) <= ts[-1]:  # a restart: its rows replace the later ones
+                keep = [i for i, x in enumerate(ts) if x < float(t)]
+                ts, vs = [ts[i] for i in keep], [vs[i] for i in keep]
+            ts.append(float(t))
+            vs.append(vec)
+    return np.array(ts), np.array(vs)
+
+
+@dataclass
+class PorePressure:
+    """Mean pore pressure of the stationary regime (Zhou et al. 2019, Figs 5b, 6b).
+
+    The lines of the paper's Fig. 5b: near the orifice, eq. 20 at the orifice,
+    slope eta_f/(kappa_v S_o)(Q_air - Q/rho); far from it, the slope with the
+    silo section S_b in place of S_o and an intercept fitted by least squares.
+    They cross at ``slope_change_height`` (the paper: ~0.42 D).
+
+    Attributes
+    ----------
+    y, pressure
+        Heights of the taps on the axis [m] and their mean pore pressure over
+        the steady window while inside the granular bed [Pa].
+    gradient_near, gradient_far
+        The two slopes [Pa/m] (theory, from the relative gas flux).
+    far_intercept
+        Intercept of the far line, fitted [Pa].
+    slope_change_height
+        Where the two lines cross [m].
+    gradient_far_fit
+        Free least-squares slope of the far taps [Pa/m] (a measurement).
+    gradient_orifice_measured
+        Mean gradient over the orifice from the measured gas flux [Pa/m].
+    zone_gradient
+        Mean dp_f/dz over the zone of radius D/2 above the orifice [Pa/m].
+    gas_flux
+        Mean relative gas flux out through the orifice [m^3/s, per unit
+        depth for planar]; negative: air drawn in.
+    """
+
+    y: np.ndarray
+    pressure: np.ndarray
+    gradient_near: float
+    gradient_far: float
+    far_intercept: float
+    slope_change_height: float
+    gradient_far_fit: float
+    gradient_orifice_measured: float
+    zone_gradient: float
+    gas_flux: float
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-friendly form."""
+        d = dict(self.__dict__)
+        d["y"] = self.y.tolist()
+        d["pressure"] = self.pressure.tolist()
+        return d
+
+
+def pore_pressure(case: Path, scene: Scene, d: Discharge, st: SteadyState) -> PorePressure:
+    """Reduce the pore-pressure outputs over the steady window."""
+    L, D = scene.silo.width, scene.silo.orifice_width
+    planar = scene.representation == "planar"
+    s_o = D if planar else math.pi * D**2 / 4
+    s_b = L if planar else math.pi * L**2 / 4
+    resistance = scene.air.viscosity / scene.permeability
+    locs, t, p = read_probes(case, "porePressureAxis", "pf")
+    y = locs[:, 1]
+    win = (t >= st.t_start) & (t <= st.t_end)
+    # equivalent fill height at each probe time, from the granular volume
+    h = np.interp(t, d.time, d.volume / (L if planar else s_b))
+    margin = 0.25 * L  # keep clear of the crater at the free surface
+    inside = win[:, None] & (y[None, :] < (h[:, None] - margin))
+    counts = inside.sum(axis=0)
+    ok = counts > 0.2 * max(1, win.sum())
+    mean = np.where(ok, np.sum(np.where(inside, p, 0.0), axis=0) / np.maximum(counts, 1), np.nan)
+    ym, pm = y[ok], mean[ok]
+    # relative gas flux through the orifice, from the mass balance
+    q_air = scene.q_air_per_depth if planar else scene.q_air
+    relative = q_air - st.q / scene.material.density
+    g_near = resistance * relative / s_o
+    g_far = resistance * relative / s_b
+    far = ym > 1.5 * D
+    c_far = float(np.mean(pm[far] - g_far * ym[far])) if far.any() else math.nan
+    y_star = c_far / (g_near - g_far) if g_near != g_far else math.nan
+    g_far_fit = float(np.polyfit(ym[far], pm[far], 1)[0]) if far.sum() >= 2 else math.nan
+    tz, gz = _vector_series(case, "orificeZoneGradient")
+    wz = (tz >= st.t_start) & (tz <= st.t_end)
+    zone = float(np.mean(gz[wz, 1])) if wz.any() else math.nan
+    _, gas = read_function_object(case, "orificeGasFlow")
+    wg = (gas[:, 0] >= st.t_start) & (gas[:, 0] <= st.t_end)
+    flux = float(np.mean(gas[wg, 1]) / d.depth) if wg.any() else math.nan
+    return PorePressure(
+        ym, pm, g_near, g_far, c_far, y_star, g_far_fit, resistance * flux / s_o, zone, flux
+    )
+
+
+def _pore_pressure_summary(
+    case: Path, scene: Scene, d: Discharge, st: SteadyState
+) -> dict[str, Any]:
+    """Pore-pressure figures of Zhou et al. Figs 5b and 6b, dimensional and scaled."""
+    pp = pore_pressure(case, scene, d, st)
+    rho_g = scene.material.density * scene.gravity
+    L, D = scene.silo.width, scene.silo.orifice_width
+    q_air = scene.q_air_per_depth if scene.representation == "planar" else scene.q_air
+    relative = q_air - st.q / scene.material.density  # Q_air - Q/rho
+    return {
+        **pp.as_dict(),
+        "pressure_scaled": (pp.pressure / (rho_g * L)).tolist(),
+        "y_over_L": (pp.y / L).tolist(),
+        "gradient_near_scaled": pp.gradient_near / rho_g,
+        "gradient_far_scaled": pp.gradient_far / rho_g,
+        "far_intercept_scaled": pp.far_intercept / (rho_g * L),
+        "gradient_far_fit_scaled": pp.gradient_far_fit / rho_g,
+        "gradient_orifice_measured_scaled": pp.gradient_orifice_measured / rho_g,
+        "gradient_ratio": pp.gradient_near / pp.gradient_far,
+        "slope_change_over_D": pp.slope_change_height / D,
+        "zone_gradient_scaled": pp.zone_gradient / rho_g,
+        "relative_gas_flux": relative,
+        "relative_gas_flux_measured": pp.gas_flux,
+        # Fig. 6b abscissa: eta_f/(rho g kappa_v S_o) (Q_air - Q/rho) = near slope / rho g
+        "fig6b_abscissa": pp.gradient_near / rho_g,
+    }

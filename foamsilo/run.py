@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from foamsilo.errors import DivergenceError, FoamError, FoamsiloError
+from foamsilo.errors import DivergenceError, FoamError, FoamsiloError, RunTimeLimitError
 from foamsilo.solver import SolverBuild
 from foamsilo.toolchain import OpenFOAM
 
@@ -294,6 +294,7 @@ def run_solver(
     solver: SolverBuild,
     *,
     progress: ProgressCallback | None = None,
+    max_wall_seconds: float | None = None,
 ) -> RunResult:
     """Run siloFoam serially in ``case`` through PyFoam.
 
@@ -307,11 +308,16 @@ def run_solver(
         The solver build.
     progress
         Called after each time step with the monitor and the end time.
+    max_wall_seconds
+        Stop the solver after this much wall time (a run that crawls on with
+        a shrinking step must not hang a sweep).
 
     Raises
     ------
     DivergenceError
         The run diverged and was stopped; the case is kept.
+    RunTimeLimitError
+        The wall-time limit was reached; the case is kept.
     FoamError
         The solver failed (fatal error) for another reason.
     """
@@ -330,6 +336,9 @@ def run_solver(
 
     from PyFoam.RunDictionary.SolutionDirectory import SolutionDirectory
 
+    started = time.perf_counter()
+    timed_out = []
+
     class _Runner(BasicRunner):
         def getSolutionDirectory(self, archive: str | None = None) -> SolutionDirectory:
             # the case already has case.foam; no second ParaView stub
@@ -341,6 +350,11 @@ def run_solver(
             monitor.feed(line)
             if monitor.divergence is not None or (monitor.fatal and len(monitor.fatal) > 40):
                 self.run.interrupt(pass_int=False)  # SIGKILL: stop now, keep the case
+                return
+            if max_wall_seconds and time.perf_counter() - started > max_wall_seconds:
+                if not timed_out:
+                    timed_out.append(monitor.current_time)
+                    self.run.interrupt(pass_int=False)
                 return
             if progress is not None and len(monitor.steps) != n_before:
                 progress(monitor, end_time)
@@ -372,6 +386,8 @@ def run_solver(
     monitor.write_table(case / STEP_TABLE)
     rss = data.get("usedMemory")
 
+    if timed_out and monitor.divergence is None:
+        raise RunTimeLimitError(float(max_wall_seconds or 0), timed_out[0], end_time, case)
     if monitor.divergence is not None:
         d = monitor.divergence
         good = time_directories(case)

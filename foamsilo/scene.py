@@ -64,6 +64,13 @@ class Silo:
     orifice_width: float = _f("orifice width D (slot width in a planar silo)", "m", gt=0)
     shape: Literal["rectangular"] = _f("cross-section of the silo", default="rectangular")
     orifice_position: Literal["bottom"] = _f("where the orifice is", default="bottom")
+    thickness: float | None = _f(
+        "thickness W of a thin (quasi-2D) planar silo; needed for wall friction and to turn "
+        "an air flow in m^3/s into a flow per unit depth",
+        "m",
+        gt=0,
+        default=None,
+    )
 
 
 @dataclass(frozen=True)
@@ -87,6 +94,14 @@ class Material:
         gt=0,
         default=None,
     )
+    wall_friction: float | None = _f(
+        "Coulomb friction mu_w on the front and back walls of a thin planar silo "
+        "(Zhou eq. 14; needs silo.thickness)",
+        "",
+        ge=0,
+        le=2,
+        default=None,
+    )
 
 
 @dataclass(frozen=True)
@@ -95,6 +110,49 @@ class Air:
 
     density: float = _f("gas density rho_f", "kg/m^3", gt=0, default=1.2)
     viscosity: float = _f("gas dynamic viscosity eta_f", "Pa s", gt=0, default=1.8e-5)
+
+
+@dataclass(frozen=True)
+class Gas:
+    """Gas coupling (Zhou et al. 2019): modes named as the paper names them."""
+
+    mode: Literal["open-top", "closed-top", "injection"] = _f(
+        "open-top: no coupling (no pore pressure at all); closed-top: Q_air = 0, air drawn "
+        "in through the orifice; injection: air injected at the top at Q_air",
+        default="open-top",
+    )
+    q_air: float | None = _f("injected air flow (injection mode)", "m^3/s", gt=0, default=None)
+    q_air_lpm: float | None = _f("injected air flow (injection mode)", "L/min", gt=0, default=None)
+    q_air_scaled: float | None = _f(
+        "injected air flow per unit depth over sqrt(g L^3) (planar scenes, Zhou Fig. 4b)",
+        "",
+        gt=0,
+        default=None,
+    )
+    permeability: float | None = _f(
+        "Darcy permeability kappa_v of the grains; default Ergun at packing_fraction",
+        "m^2",
+        gt=0,
+        default=None,
+    )
+    permeability_scaled: float | None = _f(
+        "Zhou's dimensionless permeability zeta = kappa_v rho_p sqrt(g/L)/eta_f (their "
+        "simulations: 1); replaces permeability",
+        "",
+        gt=0,
+        default=None,
+    )
+    inertial: bool = _f("Forchheimer term (kappa_i, Ergun) on; off: Darcy only", default=True)
+    packing_fraction: float = _f(
+        "volume fraction phi in the Ergun permeabilities", "", gt=0, lt=1, default=0.6
+    )
+    permeability_ratio: float = _f(
+        "how much more permeable the gas region is (Zhou: zeta_inf = 100)",
+        "",
+        ge=1,
+        le=1e6,
+        default=100.0,
+    )
 
 
 @dataclass(frozen=True)
@@ -160,6 +218,14 @@ class Numerics:
     cache_gradients: bool = _f(
         "compute grad(U) once per step for the rheology and the stress", default=True
     )
+    friction_relaxation: float = _f(
+        "weight of the new wall-friction drag coefficient each step (1: none); the drag "
+        "follows the pressure, which follows the drag: thin silos oscillate without it",
+        "",
+        gt=0,
+        le=1,
+        default=0.2,
+    )
     ddt_correction: bool = _f(
         "Rhie-Chow ddtCorr in the projection (off: more robust above Courant 0.5)",
         default=True,
@@ -178,6 +244,7 @@ class Scene:
     description: str = _f("one-line description", default="")
     air: Air = _f("gas phase", default=Air())
     numerics: Numerics = _f("linear solvers and scheme switches", default=Numerics())
+    gas: Gas = _f("gas coupling: open top, closed top or injection", default=Gas())
     gravity: float = _f(
         "magnitude of the gravitational acceleration", "m/s^2", gt=0, le=100, default=GRAVITY
     )
@@ -200,6 +267,64 @@ class Scene:
             return m.viscosity_cap
         assert m.viscosity_cap_scaled is not None
         return m.viscosity_cap_scaled * self.rho_sqrt_gL3
+
+    @property
+    def gas_coupled(self) -> bool:
+        """Whether the scene has a pore pressure (closed top or injection)."""
+        return self.gas.mode != "open-top"
+
+    @property
+    def wall_friction(self) -> bool:
+        """Whether the quasi-2D wall friction term is on."""
+        return bool(self.material.wall_friction)
+
+    @property
+    def q_air_per_depth(self) -> float:
+        """Injected air flow per unit depth of a planar scene [m^2/s] (0: none)."""
+        g = self.gas
+        if g.mode != "injection":
+            return 0.0
+        if g.q_air_scaled is not None:
+            return g.q_air_scaled * math.sqrt(self.gravity * self.silo.width**3)
+        assert self.silo.thickness is not None
+        return self.q_air / self.silo.thickness
+
+    @property
+    def q_air(self) -> float:
+        """Injected air flow [m^3/s] (0: none); planar scaled flows use the thickness."""
+        g = self.gas
+        if g.mode != "injection":
+            return 0.0
+        if g.q_air is not None:
+            return g.q_air
+        if g.q_air_lpm is not None:
+            return g.q_air_lpm * 1e-3 / 60
+        return self.q_air_per_depth * (self.silo.thickness or 1.0)
+
+    @property
+    def permeability(self) -> float:
+        """Darcy permeability kappa_v of the grains [m^2]."""
+        g = self.gas
+        if g.permeability is not None:
+            return g.permeability
+        if g.permeability_scaled is not None:
+            rho = self.material.density
+            return (
+                g.permeability_scaled
+                * self.air.viscosity
+                / (rho * math.sqrt(self.gravity / self.silo.width))
+            )
+        phi, d = g.packing_fraction, self.material.grain_diameter
+        return (1 - phi) ** 3 * d**2 / (150 * phi**2)  # Ergun
+
+    @property
+    def inertial_permeability(self) -> float | None:
+        """Forchheimer permeability kappa_i [m^2] (Ergun), None for Darcy only."""
+        g = self.gas
+        if not g.inertial:
+            return None
+        phi, d = g.packing_fraction, self.material.grain_diameter
+        return (1 - phi) ** 3 * d**2 / (1.75 * phi)
 
     @property
     def delta_t_max(self) -> float:
@@ -377,6 +502,7 @@ def _validate(scene: Scene) -> None:
             f"got {me.representation!r}; a rectangular silo with a bottom slot is "
             "meshed planar; allowed: 'auto', 'planar'",
         )
+    _validate_gas(scene)
     if scene.run.write_interval > scene.run.end_time:
         raise SceneError(
             "run.write_interval",
@@ -385,6 +511,40 @@ def _validate(scene: Scene) -> None:
         )
     if not scene.name or any(c in scene.name for c in "/\\ \t\n"):
         raise SceneError("name", f"got {scene.name!r}; allowed: a non-empty word without spaces")
+
+
+def _validate_gas(scene: Scene) -> None:
+    g, s, m = scene.gas, scene.silo, scene.material
+    flows = [k for k in ("q_air", "q_air_lpm", "q_air_scaled") if getattr(g, k) is not None]
+    if g.mode == "injection":
+        if len(flows) != 1:
+            raise SceneError(
+                "gas.q_air",
+                "injection needs exactly one of gas.q_air [m^3/s], gas.q_air_lpm [L/min], "
+                f"gas.q_air_scaled; got {flows or 'none'}",
+            )
+        if flows[0] == "q_air_scaled" and scene.representation != "planar":
+            raise SceneError("gas.q_air_scaled", "only for planar scenes; use gas.q_air")
+        if flows[0] != "q_air_scaled" and scene.representation == "planar" and not s.thickness:
+            raise SceneError(
+                "silo.thickness",
+                "missing: a planar scene needs the silo thickness W to turn gas.q_air into a "
+                "flow per unit depth (or give gas.q_air_scaled)",
+            )
+    elif flows:
+        raise SceneError(
+            f"gas.{flows[0]}",
+            f"an air flow is only for gas.mode = 'injection' (got mode {g.mode!r})",
+        )
+    if g.permeability is not None and g.permeability_scaled is not None:
+        raise SceneError(
+            "gas.permeability", "give gas.permeability or gas.permeability_scaled, not both"
+        )
+    if m.wall_friction:
+        if not s.thickness:
+            raise SceneError("material.wall_friction", "needs silo.thickness (the wall gap W)")
+        if scene.representation != "planar":
+            raise SceneError("material.wall_friction", "only for thin planar silos")
 
 
 def scene_from_dict(data: dict[str, Any]) -> Scene:
@@ -414,7 +574,11 @@ def parse_override(item: str) -> tuple[list[str], Any]:
 
 
 def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[str, Any]:
-    """Return a copy of ``data`` with ``--set`` style overrides applied."""
+    """Return a copy of ``data`` with ``--set`` style overrides applied.
+
+    ``section.key=value`` sets a value (a TOML literal); ``section.key=`` with
+    nothing after the ``=`` removes the key, so that its default applies.
+    """
     out = copy.deepcopy(data)
     for item in overrides or []:
         path, value = parse_override(item)
@@ -423,7 +587,10 @@ def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[s
             node = node.setdefault(part, {})
             if not isinstance(node, dict):
                 raise SceneError(".".join(path), "is not a table")
-        node[path[-1]] = value
+        if value == "":  # "key=" unsets the key (its default applies)
+            node.pop(path[-1], None)
+        else:
+            node[path[-1]] = value
     return out
 
 

@@ -89,5 +89,40 @@ def test_parallel_dictionary_only_when_needed(tmp_path):
 
 def test_no_pore_pressure_machinery_in_a_dry_silo(rendered):
     _, case, files = rendered
-    assert not any("p_f" in f or "pf" in f.split("/")[-1] for f in files)
-    assert "Darcy" not in (case / "constant/transportProperties").read_text()
+    assert not any(f.split("/")[-1] in ("pf", "porePressureProperties", "topoSetDict",
+                                        "wallFrictionProperties") for f in files)  # fmt: skip
+    cd = (case / "system/controlDict").read_text()
+    assert "pf" not in re.findall(r"fields\s*\(([^)]*)\)", cd)[0]
+    assert "porePressureAxis" not in cd
+    assert '"pf.*"' not in (case / "system/fvSolution").read_text()
+
+
+def test_gas_scene_gets_the_pore_pressure_files(tmp_path):
+    scene = load_preset("zhou-planar-gas", ["mesh.cells_across=32"])
+    files = render_templates(scene, tmp_path)
+    for f in ("0/pf", "constant/porePressureProperties", "system/topoSetDict",
+              "constant/wallFrictionProperties"):  # fmt: skip
+        assert f in files, f
+    pp = (tmp_path / "constant/porePressureProperties").read_text()
+    assert float(_entry(pp, "permeability")) == pytest.approx(scene.permeability, rel=1e-9)
+    assert "inertialPermeability" not in pp  # Darcy
+    # the planar mesh is one cell thick: the flow per depth times the cell size
+    inj = float(_entry(pp, "injectionFlux"))
+    assert inj == pytest.approx(scene.q_air_per_depth * scene.cell_size, rel=1e-9)
+    pf = (tmp_path / "0/pf").read_text()
+    assert re.search(r"orifice\s*\{\s*type\s+fixedValue;\s*value\s+uniform 0;", pf)
+    assert re.search(r"atmosphere\s*\{\s*type\s+fixedGradient;", pf)
+    cd = (tmp_path / "system/controlDict").read_text()
+    assert "porePressureAxis" in cd and "orificeZoneGradient" in cd
+    wf = (tmp_path / "constant/wallFrictionProperties").read_text()
+    assert float(_entry(wf, "frictionCoefficient")) == 0.1
+    assert float(_entry(wf, "thickness")) == pytest.approx(0.025)
+
+
+def test_forchheimer_entries_when_inertial(tmp_path):
+    scene = load_preset("zhou-planar-gas", ["gas.inertial=true"])
+    render_templates(scene, tmp_path)
+    pp = (tmp_path / "constant/porePressureProperties").read_text()
+    assert float(_entry(pp, "inertialPermeability")) == pytest.approx(
+        scene.inertial_permeability, rel=1e-9
+    )

@@ -133,3 +133,72 @@ def test_committed_scene_reference_is_current():
     assert doc.read_text().strip() == reference_markdown().strip(), (
         "docs/scene-reference.md is stale: foamsilo scene-reference > docs/scene-reference.md"
     )
+
+
+# ---------------------------------------------------------------- gas coupling
+
+GAS = ["silo.thickness=0.025", "material.wall_friction=0.1", 'gas.mode="injection"',
+       "gas.q_air_scaled=0.5", "gas.permeability_scaled=1", "gas.inertial=false"]  # fmt: skip
+
+
+def test_gas_scene_derived_values():
+    s = load_preset("zhou-planar", GAS)
+    assert s.gas_coupled and s.wall_friction
+    g, L = 9.81, 0.1
+    assert s.q_air_per_depth == pytest.approx(0.5 * math.sqrt(g * L**3))
+    assert s.q_air == pytest.approx(s.q_air_per_depth * 0.025)
+    # zeta = kappa rho sqrt(g/L)/eta_f = 1
+    assert s.permeability * 2500 * math.sqrt(g / L) / 1.8e-5 == pytest.approx(1.0)
+    assert s.inertial_permeability is None
+    ergun = load_preset("zhou-planar", ['gas.mode="closed-top"'])
+    phi, d = 0.6, 0.1 / 90
+    assert ergun.permeability == pytest.approx((1 - phi) ** 3 * d**2 / (150 * phi**2))
+    assert ergun.inertial_permeability == pytest.approx((1 - phi) ** 3 * d**2 / (1.75 * phi))
+    assert ergun.q_air == 0.0 and ergun.gas_coupled
+
+
+def test_air_flow_units():
+    base = ["silo.thickness=0.025", 'gas.mode="injection"']
+    lpm = load_preset("zhou-planar", base + ["gas.q_air_lpm=12"])
+    si = load_preset("zhou-planar", base + ["gas.q_air=2e-4"])
+    assert lpm.q_air == pytest.approx(si.q_air) == pytest.approx(2e-4)
+    assert lpm.q_air_per_depth == pytest.approx(2e-4 / 0.025)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field", "text"),
+    [
+        (['gas.mode="injection"'], "gas.q_air", "exactly one"),
+        (['gas.mode="injection"', "gas.q_air=1e-3", "gas.q_air_lpm=5"], "gas.q_air", "exactly one"),
+        (['gas.mode="injection"', "gas.q_air=1e-3"], "silo.thickness", "thickness"),
+        (["gas.q_air=1e-3"], "gas.q_air", "only for gas.mode = 'injection'"),
+        (['gas.mode="closed-top"', "gas.q_air_lpm=3"], "gas.q_air_lpm", "injection"),
+        (["material.wall_friction=0.1"], "material.wall_friction", "silo.thickness"),
+        (['gas.mode="sideways"'], "gas.mode", "'open-top', 'closed-top', 'injection'"),
+        (["gas.permeability=1e-10", "gas.permeability_scaled=1"], "gas.permeability", "not both"),
+        (["gas.packing_fraction=1.2"], "gas.packing_fraction", "< 1"),
+        (["gas.inertial=1"], "gas.inertial", "true, false"),
+    ],
+)
+def test_gas_errors_name_the_field(overrides, field, text):
+    with pytest.raises(SceneError) as exc:
+        load_preset("zhou-planar", overrides)
+    assert exc.value.field == field
+    assert text in str(exc.value)
+
+
+def test_empty_override_unsets_a_key():
+    s = load_preset("zhou-planar-gas", ['gas.mode="open-top"', "gas.q_air_scaled="])
+    assert not s.gas_coupled and s.gas.q_air_scaled is None
+    with pytest.raises(SceneError):  # without unsetting, the preset's flow is refused
+        load_preset("zhou-planar-gas", ['gas.mode="open-top"'])
+
+
+def test_zhou_planar_gas_preset():
+    s = load_preset("zhou-planar-gas")
+    L = s.silo.width
+    assert s.silo.thickness == pytest.approx(0.25 * L)
+    assert s.material.wall_friction == 0.1
+    assert s.gas.permeability_scaled == 1.0 and not s.gas.inertial
+    assert s.gas.permeability_ratio == 100
+    assert s.q_air_per_depth / math.sqrt(9.81 * L**3) == pytest.approx(0.5)
