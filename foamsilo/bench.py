@@ -17,6 +17,7 @@ import platform
 import re
 import shutil
 import subprocess
+import sys
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -24,6 +25,7 @@ from typing import Any
 
 from foamsilo import __version__
 from foamsilo.case import create_case
+from foamsilo.errors import FoamsiloError
 from foamsilo.post import summarize
 from foamsilo.run import run_solver
 from foamsilo.scene import load_preset
@@ -346,3 +348,83 @@ def bench_gas(cells: int, end_time: float, work_dir: Path) -> dict[str, Any]:
         "commit": _git_commit(),
         "rows": rows,
     }
+
+
+def _cells_across_for(preset: str, sets: list[str], target: int) -> tuple[int, int]:
+    """cells_across whose mesh is closest to ``target`` cells, and that count."""
+    from foamsilo.errors import SceneError
+    from foamsilo.mesh import cells_estimate
+
+    best = (0, 0)
+    for n in range(8, 1024):
+        try:
+            c = cells_estimate(load_preset(preset, [*sets, f"mesh.cells_across={n}"]))
+        except SceneError:  # too coarse for the orifice
+            continue
+        if abs(c - target) < abs(best[1] - target) or best == (0, 0):
+            best = (n, c)
+        if c > 1.5 * target:
+            break
+    return best
+
+
+def bench_mesh(targets: list[int], work_dir: Path) -> dict[str, Any]:
+    """Meshing time and memory of a 3D cylinder (Venier Test 1 meshed in 3D).
+
+    Each size runs ``foamsilo mesh`` in a fresh process; wall time split into
+    gmsh (geometry, mesh, .msh), gmshToFoam and checkMesh; peak memory is the
+    largest resident set of that process and the utilities it ran.
+    """
+    import resource
+
+    preset, sets = "venier-test1", ["mesh.representation='3d'"]
+    rows = []
+    for target in targets:
+        n, est = _cells_across_for(preset, sets, target)
+        out = work_dir / f"mesh-{n}"
+        cmd = [sys.executable, "-m", "foamsilo", "mesh", preset, "-o", str(out), "--overwrite",
+               "--json", "--set", f"mesh.cells_across={n}", "--set", sets[0]]  # fmt: skip
+        t0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, text=True)
+        stdout, _ = proc.communicate()
+        wall = time.perf_counter() - t0
+        payload = json.loads(stdout)
+        if not payload.get("ok"):
+            raise FoamsiloError(f"meshing {n} across failed: {payload.get('error')}")
+        children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+        rows.append(
+            {
+                "cells_across": n,
+                "cells": payload["cells"],
+                "cell_kind": payload["cell_kind"],
+                "wall_s": round(wall, 2),
+                "timings_s": payload["timings_s"],
+                "max_rss_mb_so_far": round(children, 1),
+                "checkMesh": payload["checkMesh"],
+            }
+        )
+        shutil.rmtree(out, ignore_errors=True)
+    return {"benchmark": "mesh", "preset": preset, "machine": machine_info(),
+            "commit": _git_commit(), "rows": rows}  # fmt: skip
+
+
+def mesh_report(result: dict[str, Any]) -> str:
+    """Markdown table of a mesh benchmark."""
+    m = result["machine"]
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; commit {result['commit']}.",
+        "",
+        "| cells | cells across | kind | gmsh [s] | gmshToFoam [s] | checkMesh [s] | total [s] "
+        "| peak RSS [MB] | max non-orth [deg] | max skewness |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in result["rows"]:
+        t = r["timings_s"]
+        c = r["checkMesh"]
+        lines.append(
+            f"| {r['cells']:,} | {r['cells_across']} | {r['cell_kind']} | {t['gmsh']:.1f} "
+            f"| {t['gmshToFoam']:.1f} | {t['checkMesh']:.1f} | {r['wall_s']:.1f} "
+            f"| {r['max_rss_mb_so_far']:.0f} | {c['max_non_orthogonality']:.1f} "
+            f"| {c['max_skewness']:.2f} |"
+        )
+    return "\n".join(lines)

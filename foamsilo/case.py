@@ -78,6 +78,19 @@ def template_context(scene: Scene) -> dict[str, Any]:
     """Values the templates see: the scene sections plus derived numbers."""
     rep = scene.representation
     depth = scene.cell_size if rep == "planar" else 1.0
+    constraint = {
+        "planar": [("frontAndBack", "empty")],
+        "axisymmetric": [("front", "wedge"), ("back", "wedge")],
+        "3d": [],
+    }[rep]
+    s = scene.silo
+    # the orifice's centre on the floor (the probes' axis and the zone's centre)
+    if rep == "planar" or s.shape == "rectangular":
+        x_axis = s.width / 2
+    elif rep == "axisymmetric":
+        x_axis = 0.25 * scene.cell_size  # just off the (degenerate) axis
+    else:
+        x_axis = s.eccentricity
     H, D = scene.silo.height, scene.silo.orifice_width
     n_probes = 50
     return {
@@ -95,19 +108,27 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "eta_max": scene.eta_max,
         "p_min": scene.p_min,
         "nu_air": scene.air.viscosity / scene.air.density,
-        "empty_patches": ["frontAndBack"] if rep == "planar" else [],
+        "constraint_patches": constraint,
+        "axis_x": x_axis,
+        "mid_depth": 0.5 * depth
+        if rep == "planar"
+        else (s.thickness or 0.0) / 2
+        if s.shape == "rectangular"
+        else 0.0,
         # A start step far below the Courant limit; the controller grows it
         "initial_delta_t": 1e-3 * scene.cell_size / (scene.gravity * scene.silo.width) ** 0.5,
         "n_non_orthogonal_correctors": 0,
         # gas coupling
         "permeability": scene.permeability,
         "inertial_permeability": scene.inertial_permeability,
-        # planar mesh: flow per unit depth times the cell thickness
-        "injection_flux": scene.q_air_per_depth * depth if rep == "planar" else scene.q_air,
+        # the flow into the mesh: per unit depth times the cell thickness
+        # (planar), the wedge's share (axisymmetric), all of it (3D)
+        "injection_flux": scene.q_air_per_depth * depth
+        if rep == "planar"
+        else scene.q_air * scene.mesh_fraction,
         # taps on the axis: dense over the first D, then up to the top
         "axis_probes": [D * (k + 0.5) / 20 for k in range(20)]
         + [D + (H - D) * (k + 0.5) / n_probes for k in range(n_probes)],
-        "mid_depth": 0.5 * depth if rep == "planar" else 0.0,
         "friction_velocity": 1e-3 * (scene.gravity * scene.silo.width) ** 0.5,
         "friction_relaxation": scene.numerics.friction_relaxation,
     }

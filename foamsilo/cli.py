@@ -467,6 +467,19 @@ def cmd_bench(args: argparse.Namespace) -> int:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
         return 0
+    if args.suite == "mesh":
+        from foamsilo.bench import bench_mesh, mesh_report
+
+        targets = [int(c) for c in args.cells] if args.cells != ["32", "64"] else [64800, 1000000]
+        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
+            res = bench_mesh(targets, Path(args.work_dir) if args.work_dir else Path(tmp))
+        text = mesh_report(res)
+        if args.log:
+            write_result(res, Path(args.log).with_name("mesh.jsonl"))
+        if args.output:
+            Path(args.output).write_text(text + "\n")
+        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
+        return 0
     cells = [int(c) for c in args.cells]
     if args.suite == "gas":
         from foamsilo.bench import bench_gas
@@ -668,9 +681,10 @@ def build_parser() -> argparse.ArgumentParser:
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
         "suite",
-        choices=["solver", "gas", "report"],
-        help="solver: cost and accuracy; gas: pore-pressure cost against dry; "
-        "report: tables from --log",
+        choices=["solver", "gas", "mesh", "report"],
+        help="solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
+        "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
+        "1000000); report: tables from --log",
     )
     sp.add_argument("-o", "--output", help="report: write the Markdown here")
     sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")

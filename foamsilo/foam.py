@@ -223,3 +223,41 @@ def write_internal_field(path: Path, values: np.ndarray) -> None:
     if n != 1:
         raise ValueError(f"{path}: internalField not found")
     Path(path).write_text(text)
+
+
+_VOLUME_DICT = """FoamFile { version 2.0; format ascii; class dictionary; object foamsiloVolume; }
+functions
+{
+    foamsiloVolume
+    {
+        type            volFieldValue;
+        libs            ("libfieldFunctionObjects.so");
+        log             true;
+        writeFields     false;
+        writeToFile     false;
+        regionType      all;
+        operation       volIntegrate;
+        fields          (alpha.granular);
+    }
+}
+"""
+
+
+def granular_volume(of: OpenFOAM, case: Path, time: str = "0") -> float:
+    """Volume of grains in the mesh, the integral of alpha.granular [m^3].
+
+    Runs ``postProcess`` with a volIntegrate function object at ``time``.
+    """
+    d = case / "system" / "foamsiloVolumeDict"
+    d.write_text(_VOLUME_DICT)
+    try:
+        out = run_utility(
+            of, case, "postProcess", "-dict", str(d), "-time", time,
+            "-fields", "(alpha.granular)", log_name="granularVolume",
+        )  # fmt: skip
+    finally:
+        d.unlink(missing_ok=True)
+    m = re.search(r"volIntegrate\(\S*\) of alpha\.granular = (\S+)", out)
+    if not m:
+        raise FoamError("postProcess volIntegrate", 0, out, case)
+    return float(m.group(1))

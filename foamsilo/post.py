@@ -155,7 +155,7 @@ def read_discharge(case: Path, scene: Scene) -> Discharge:
         raise FoamsiloError(f"{case}: flux and volume outputs are not on the same times")
     t = flux[:, 0]
     dt = np.diff(np.concatenate([[0.0], t]))
-    depth = scene.cell_size if scene.representation == "planar" else 1.0
+    depth = scene.mesh_fraction
     q = flux[:, 1] / depth
     v = vol[:, 1] / depth
     top = None
@@ -216,7 +216,7 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     """Locate the stationary regime of Q(t) and average over it."""
     T = scene.time_scale
     t, q = d.time, d.mass_flow
-    area = scene.silo.width  # planar: volume per unit depth / L = equivalent fill height
+    area = scene.cross_section_area  # volume / area: the equivalent fill height
     h_eq = d.volume / area
     usable = (t > 0.5 * T) & (h_eq > LOW_FILL * scene.silo.width)
     nan = SteadyState(False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
@@ -276,7 +276,8 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
 
 def write_discharge_csv(d: Discharge, scene: Scene, path: Path) -> None:
     """Q(t) table: time, dimensionless time, Q, Q dimensionless, volume, fill height."""
-    scale = scene.rho_sqrt_gL3
+    _, scale = scene.flow_rate_scale
+    planar = scene.representation == "planar"
     tmp = path.with_suffix(".csv.tmp")
     with open(tmp, "w", newline="") as fh:
         w = csv.writer(fh)
@@ -284,9 +285,9 @@ def write_discharge_csv(d: Discharge, scene: Scene, path: Path) -> None:
             [
                 "t_s",
                 "t_over_sqrt_L_g",
-                "Q_kg_per_m_s",
-                "Q_over_rho_sqrt_gL3",
-                "granular_volume_m2",
+                "Q_kg_per_m_s" if planar else "Q_kg_per_s",
+                "Q_over_rho_sqrt_gL3" if planar else "Q_over_rho_sqrt_g_D5_2",
+                "granular_volume_m2" if planar else "granular_volume_m3",
                 "fill_height_m",
             ]
         )
@@ -298,7 +299,7 @@ def write_discharge_csv(d: Discharge, scene: Scene, path: Path) -> None:
                     f"{d.mass_flow[i]:.9g}",
                     f"{d.mass_flow[i] / scale:.6g}",
                     f"{d.volume[i]:.9g}",
-                    f"{d.volume[i] / scene.silo.width:.6g}",
+                    f"{d.volume[i] / scene.cross_section_area:.6g}",
                 ]
             )
     os.replace(tmp, path)
@@ -311,32 +312,37 @@ def plot_discharge(d: Discharge, st: SteadyState, scene: Scene, path: Path) -> N
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    scale = scene.rho_sqrt_gL3
+    scale_name, scale = scene.flow_rate_scale
+    planar = scene.representation == "planar"
     T = scene.time_scale
     fig, ax = plt.subplots(figsize=(7, 4.2), dpi=120)
     ax.plot(d.time / T, d.mass_flow / scale, lw=1.2, color="C0", label="simulation, orifice flux")
     if st.steady:
         ax.axvspan(st.t_start / T, st.t_end / T, color="C0", alpha=0.08, label="steady window")
         ax.axhline(st.q / scale, color="C0", ls="--", lw=1, label=f"steady Q = {st.q / scale:.4f}")
-    ax.axhspan(
-        ZHOU_PLANAR_Q - ZHOU_PLANAR_Q_SPREAD,
-        ZHOU_PLANAR_Q + ZHOU_PLANAR_Q_SPREAD,
-        color="C1",
-        alpha=0.15,
-        label="Zhou et al. 2019, 0.16 +- 0.01",
-    )
-    bev = float(beverloo_2d(scene.silo.orifice_width, scene.material.density, scene.gravity))
-    ax.axhline(
-        bev / scale,
-        color="C2",
-        ls=":",
-        lw=1.5,
-        label=f"2D Beverloo, C = {beverloo_2d_constant():.2f}: {bev / scale:.3f}",
-    )
+    if planar:
+        ax.axhspan(
+            ZHOU_PLANAR_Q - ZHOU_PLANAR_Q_SPREAD,
+            ZHOU_PLANAR_Q + ZHOU_PLANAR_Q_SPREAD,
+            color="C1",
+            alpha=0.15,
+            label="Zhou et al. 2019, 0.16 +- 0.01",
+        )
+        bev = float(beverloo_2d(scene.silo.orifice_width, scene.material.density, scene.gravity))
+        ax.axhline(
+            bev / scale,
+            color="C2",
+            ls=":",
+            lw=1.5,
+            label=f"2D Beverloo, C = {beverloo_2d_constant():.2f}: {bev / scale:.3f}",
+        )
+    ref = reference_rate(scene)
+    if not planar and ref is not None:
+        ax.axhline(ref["Q"] / scale, color="C1", ls=":", lw=1.5, label=ref["label"])
     ax.set_xlabel(r"$t/\sqrt{L/g}$")
-    ax.set_ylabel(r"$Q/(\rho\sqrt{gL^3})$")
+    ax.set_ylabel(r"$Q/(\rho\sqrt{gL^3})$" if planar else r"$Q/(\rho\sqrt{g}D^{5/2})$")
     ax.set_title(f"{scene.name}: {scene.mesh.cells_across} cells across L")
-    ax.set_ylim(0, max(0.25, 1.2 * float(np.max(d.mass_flow / scale))))
+    ax.set_ylim(0, max(0.25 if planar else 0.1, 1.2 * float(np.max(d.mass_flow / scale))))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
@@ -344,6 +350,38 @@ def plot_discharge(d: Discharge, st: SteadyState, scene: Scene, path: Path) -> N
     fig.savefig(tmp)
     plt.close(fig)
     os.replace(tmp, path)
+
+
+def reference_rate(scene: Scene) -> dict[str, Any] | None:
+    """Return the published law a non-planar scene's steady rate is compared with.
+
+    A flat-bottomed cylinder with a centred bottom orifice: Zhou et al. 2019
+    eq. 1 with the Table I constants of the cylindrical silo (the phase
+    density is the bulk density phi_b rho_p).  None for other shapes.
+    """
+    s = scene.silo
+    if scene.representation == "planar" or s.shape != "cylindrical":
+        return None
+    if s.orifice_position != "bottom":
+        return None
+    from foamsilo.analytic.zhou import config, q0_bottom
+
+    c = config("cyl-bottom")
+    assert c.C0 is not None
+    q = float(
+        q0_bottom(
+            s.orifice_width,
+            scene.material.grain_diameter,
+            1.0,
+            scene.material.density,
+            c.C0,
+            c.alpha_D,
+            c.beta,
+            None,
+            scene.gravity,
+        )
+    )
+    return {"Q": q, "label": f"Zhou et al. 2019 eq. 1, C0 = {c.C0}: {q * 1e3:.2f} g/s"}
 
 
 def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -366,7 +404,8 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
     scene = load_scene_file(case / SCENE_FILE)
     d = read_discharge(case, scene)
     st = find_steady(d, scene)
-    scale = scene.rho_sqrt_gL3
+    scale_name, scale = scene.flow_rate_scale
+    planar = scene.representation == "planar"
     bev = float(beverloo_2d(scene.silo.orifice_width, scene.material.density, scene.gravity))
     steady_star = st.q / scale if st.steady else None
     summary: dict[str, Any] = {
@@ -383,30 +422,40 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
         "Q": st.q if st.steady else None,
         "Q_std": st.q_std if st.steady else None,
         "Q_from_volume": st.q_from_volume if st.steady else None,
-        "Q_units": "kg/(m s) per unit depth" if scene.representation == "planar" else "kg/s",
+        "Q_units": "kg/(m s) per unit depth" if planar else "kg/s",
         "Q_dimensionless": steady_star,
         "Q_std_dimensionless": st.q_std / scale if st.steady else None,
         "Q_from_volume_dimensionless": st.q_from_volume / scale if st.steady else None,
         "flux_vs_volume_rel_diff": (abs(st.q - st.q_from_volume) / st.q if st.steady else None),
         "drift": st.drift if st.steady else None,
         "excursion": st.excursion if st.steady else None,
-        "fill_height_end_m": float(d.volume[-1] / scene.silo.width),
+        "fill_height_end_m": float(d.volume[-1] / scene.cross_section_area),
         "mass_balance_rel_error": d.mass_balance_error,
         "lost_through_top_rel": d.top_loss,
-        "flow_rate_scale": {"name": "rho sqrt(g L^3)", "value": scale},
-        "reference": {
+        "flow_rate_scale": {"name": scale_name, "value": scale},
+    }
+    if planar:
+        summary["reference"] = {
             "source": "Zhou et al. 2019, sec. III.B (open top), converged continuum rate",
             "Q_dimensionless": ZHOU_PLANAR_Q,
             "spread": ZHOU_PLANAR_Q_SPREAD,
             "rel_diff": (steady_star - ZHOU_PLANAR_Q) / ZHOU_PLANAR_Q if steady_star else None,
-        },
-        "beverloo_2d": {
+        }
+        summary["beverloo_2d"] = {
             "law": "Q = C rho sqrt(g) D^(3/2) (k = 0, continuum)",
             "C": beverloo_2d_constant(),
             "Q_dimensionless": bev / scale,
             "rel_diff": (st.q - bev) / bev if st.steady else None,
-        },
-    }
+        }
+    else:
+        ref = reference_rate(scene)
+        if ref is not None:
+            summary["reference"] = {
+                "source": ref["label"],
+                "Q": ref["Q"],
+                "Q_dimensionless": ref["Q"] / scale,
+                "rel_diff": (st.q - ref["Q"]) / ref["Q"] if st.steady else None,
+            }
     if scene.gas_coupled and st.steady:
         summary["pore_pressure"] = _pore_pressure_summary(case, scene, d, st)
     if run_info:

@@ -33,6 +33,8 @@ else:  # pragma: no cover
 from foamsilo.errors import SceneError
 
 GRAVITY = 9.81
+#: Opening angle of an axisymmetric wedge mesh [deg] (OpenFOAM: at most 5)
+WEDGE_ANGLE_DEG = 5.0
 
 Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 
@@ -56,21 +58,139 @@ def _f(
 
 @dataclass(frozen=True)
 class Silo:
-    """Geometry of the silo and its orifice."""
+    """Geometry of the silo and its orifice.
 
-    width: float = _f("silo width L (inner, wall to wall)", "m", gt=0)
+    The silo stands on y = 0 with gravity along -y; a 3D silo has its axis
+    (cylinder, hopper) or its wall-to-wall width (rectangular box) along x,
+    its thickness along z.
+    """
+
+    width: float = _f(
+        "silo width L: wall to wall (rectangular), inner diameter (cylindrical), diameter "
+        "of the upper cylindrical section (hopper)",
+        "m",
+        gt=0,
+    )
     height: float = _f("silo height H, bottom to the open top of the domain", "m", gt=0)
     fill_height: float = _f("initial height of the granular column", "m", gt=0)
-    orifice_width: float = _f("orifice width D (slot width in a planar silo)", "m", gt=0)
-    shape: Literal["rectangular"] = _f("cross-section of the silo", default="rectangular")
-    orifice_position: Literal["bottom"] = _f("where the orifice is", default="bottom")
-    thickness: float | None = _f(
-        "thickness W of a thin (quasi-2D) planar silo; needed for wall friction and to turn "
-        "an air flow in m^3/s into a flow per unit depth",
+    orifice_width: float = _f(
+        "orifice size D: slot width (planar), disk diameter, height of a lateral orifice, "
+        "outlet width or diameter of a hopper",
+        "m",
+        gt=0,
+    )
+    shape: Literal["rectangular", "cylindrical", "hopper"] = _f(
+        "rectangular box, flat-bottomed cylinder, or conical (wedge-shaped if planar) hopper "
+        "below a cylindrical section",
+        default="rectangular",
+    )
+    orifice_position: Literal["bottom", "lateral"] = _f(
+        "bottom, or lateral (on the wall at x = +L/2 of a cylinder, x = L of a box)",
+        default="bottom",
+    )
+    orifice_shape: Literal["auto", "circular", "rectangular"] = _f(
+        "auto: circular in a cylinder's bottom or a hopper, rectangular otherwise",
+        default="auto",
+    )
+    orifice_length: float | None = _f(
+        "second side W of a rectangular orifice: across the thickness of a box (default: "
+        "the whole thickness), arc length on a cylinder wall",
         "m",
         gt=0,
         default=None,
     )
+    orifice_height: float | None = _f(
+        "height of the lower edge of a lateral orifice above the bottom (Zhou: 0.02)",
+        "m",
+        ge=0,
+        default=None,
+    )
+    eccentricity: float = _f(
+        "distance e of a bottom orifice's centre from the silo axis (cylindrical)",
+        "m",
+        ge=0,
+        default=0.0,
+    )
+    hopper_angle: float | None = _f(
+        "hopper half-angle theta_w from the vertical at the outlet",
+        "deg",
+        gt=0,
+        lt=90,
+        default=None,
+    )
+    hopper_angle_upper: float | None = _f(
+        "half-angle Theta_w of an upper cone (two-angle hopper, Gremaud & Matthews Fig. 8)",
+        "deg",
+        gt=0,
+        lt=90,
+        default=None,
+    )
+    transition_width: float | None = _f(
+        "width (diameter) of a two-angle hopper where the wall angle changes",
+        "m",
+        gt=0,
+        default=None,
+    )
+    thickness: float | None = _f(
+        "thickness W of a rectangular silo (a 3D box; a thin planar silo's wall gap for wall "
+        "friction and to turn an air flow in m^3/s into a flow per unit depth)",
+        "m",
+        gt=0,
+        default=None,
+    )
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def resolved_orifice_shape(self) -> Literal["circular", "rectangular"]:
+        """Orifice shape with ``auto`` resolved."""
+        if self.orifice_shape != "auto":
+            return self.orifice_shape
+        if self.shape == "hopper" or (
+            self.shape == "cylindrical" and self.orifice_position == "bottom"
+        ):
+            return "circular"
+        return "rectangular"
+
+    def wall_radius(self, y: float) -> float:
+        """Half-width (radius) of the silo wall at height y [m]."""
+        return float(_interp(y, *zip(*self.profile, strict=True)))
+
+    @property
+    def profile(self) -> list[tuple[float, float]]:
+        """Wall corners (y, half-width) from the bottom to the top."""
+        R = self.width / 2
+        if self.shape != "hopper":
+            return [(0.0, R), (self.height, R)]
+        assert self.hopper_angle is not None
+        r = self.orifice_width / 2
+        pts = [(0.0, r)]
+        y = 0.0
+        if self.hopper_angle_upper is not None and self.transition_width is not None:
+            rt = self.transition_width / 2
+            y += (rt - r) / math.tan(math.radians(self.hopper_angle))
+            pts.append((y, rt))
+            y += (R - rt) / math.tan(math.radians(self.hopper_angle_upper))
+        else:
+            y += (R - r) / math.tan(math.radians(self.hopper_angle))
+        pts.append((y, R))
+        if y < self.height:
+            pts.append((self.height, R))
+        return pts
+
+    @property
+    def cone_height(self) -> float:
+        """Height of the top of the converging section (0 for a flat bottom) [m]."""
+        if self.shape != "hopper":
+            return 0.0
+        return next(y for y, r in self.profile if r >= self.width / 2 - 1e-15)
+
+
+def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
+    for i in range(len(xs) - 1):
+        if x <= xs[i + 1] or i == len(xs) - 2:
+            t = (x - xs[i]) / (xs[i + 1] - xs[i]) if xs[i + 1] > xs[i] else 0.0
+            return ys[i] + t * (ys[i + 1] - ys[i])
+    return ys[-1]
 
 
 @dataclass(frozen=True)
@@ -215,8 +335,10 @@ class Numerics:
     )
     u_tolerance: float = _f("absolute tolerance of the momentum solve", "", gt=0, default=1e-9)
     p_tolerance: float = _f("absolute tolerance of the pressure solve", "", gt=0, default=1e-7)
-    cache_gradients: bool = _f(
-        "compute grad(U) once per step for the rheology and the stress", default=True
+    cache_gradients: bool | None = _f(
+        "compute grad(U) once per step for the rheology and the stress; default: on in "
+        "planar and axisymmetric scenes, off in 3D (3D runs diverge with it, measured)",
+        default=None,
     )
     friction_relaxation: float = _f(
         "weight of the new wall-friction drag coefficient each step (1: none); the drag "
@@ -256,8 +378,64 @@ class Scene:
         rep = self.mesh.representation
         if rep != "auto":
             return rep
-        # A rectangular silo with a bottom slot is the planar silo of Zhou III.B
-        return "planar"
+        return self.allowed_representations[0]
+
+    @property
+    def allowed_representations(self) -> list[Literal["planar", "axisymmetric", "3d"]]:
+        """Representations faithful to the silo, cheapest first."""
+        s = self.silo
+        if s.shape == "rectangular":
+            return ["planar", "3d"]
+        if s.shape == "hopper":
+            return ["axisymmetric", "planar", "3d"]
+        centred = s.orifice_position == "bottom" and s.eccentricity == 0.0
+        return ["axisymmetric", "3d"] if centred else ["3d"]
+
+    @property
+    def mesh_fraction(self) -> float:
+        """Fraction of the silo the mesh holds (fluxes and volumes divide by it).
+
+        The depth of the planar slab [m], the wedge's share of the full
+        circle, or 1 in 3D.
+        """
+        rep = self.representation
+        if rep == "planar":
+            return self.cell_size
+        if rep == "axisymmetric":
+            # the wedge's faces are planar: its cross-section is the triangle
+            # r^2 sin(a)/2, not the sector r^2 a/2
+            return math.sin(math.radians(WEDGE_ANGLE_DEG)) / (2 * math.pi)
+        return 1.0
+
+    @property
+    def cross_section_area(self) -> float:
+        """Area of the silo's (upper) cross-section [m^2] (planar: L, per unit depth)."""
+        s = self.silo
+        if self.representation == "planar":
+            return s.width
+        if s.shape == "rectangular":
+            assert s.thickness is not None
+            return s.width * s.thickness
+        return math.pi * s.width**2 / 4
+
+    @property
+    def flow_rate_scale(self) -> tuple[str, float]:
+        """Name and value of the scale Q is made dimensionless with.
+
+        Planar: rho sqrt(g L^3) (Zhou et al. 2019); otherwise the Beverloo
+        scale rho sqrt(g) D^(5/2).
+        """
+        if self.representation == "planar":
+            return "rho sqrt(g L^3)", self.rho_sqrt_gL3
+        rho, D = self.material.density, self.silo.orifice_width
+        return "rho sqrt(g) D^(5/2)", rho * math.sqrt(self.gravity) * D**2.5
+
+    @property
+    def cache_gradients(self) -> bool:
+        """Whether grad(U) is cached (``numerics.cache_gradients`` resolved)."""
+        if self.numerics.cache_gradients is not None:
+            return self.numerics.cache_gradients
+        return self.representation != "3d"
 
     @property
     def eta_max(self) -> float:
@@ -456,11 +634,7 @@ def _convert(name: str, value: Any, typ: Any, meta: dict[str, Any]) -> Any:
 def _validate(scene: Scene) -> None:
     """Cross-field checks that a single field's range cannot express."""
     s, m, me = scene.silo, scene.material, scene.mesh
-    if s.orifice_width >= s.width:
-        raise SceneError(
-            "silo.orifice_width",
-            f"got {s.orifice_width:g} m; allowed: > 0 and < silo.width ({s.width:g} m)",
-        )
+    _validate_geometry(scene)
     if s.fill_height > s.height:
         raise SceneError(
             "silo.fill_height",
@@ -496,12 +670,6 @@ def _validate(scene: Scene) -> None:
             "silo.fill_height",
             f"got {s.fill_height:g} m; allowed: >= two cells ({2 * scene.cell_size:g} m)",
         )
-    if scene.representation != "planar":
-        raise SceneError(
-            "mesh.representation",
-            f"got {me.representation!r}; a rectangular silo with a bottom slot is "
-            "meshed planar; allowed: 'auto', 'planar'",
-        )
     _validate_gas(scene)
     if scene.run.write_interval > scene.run.end_time:
         raise SceneError(
@@ -511,6 +679,140 @@ def _validate(scene: Scene) -> None:
         )
     if not scene.name or any(c in scene.name for c in "/\\ \t\n"):
         raise SceneError("name", f"got {scene.name!r}; allowed: a non-empty word without spaces")
+
+
+def _validate_geometry(scene: Scene) -> None:
+    """Shape, orifice and representation: the checks a mesher would trip on."""
+    s, me = scene.silo, scene.mesh
+    allowed = scene.allowed_representations
+    if me.representation != "auto" and me.representation not in allowed:
+        why = {
+            "rectangular": "a rectangular silo",
+            "cylindrical": "a cylinder with a centred bottom orifice"
+            if "axisymmetric" in allowed
+            else "a cylinder with an eccentric or lateral orifice",
+            "hopper": "a hopper",
+        }[s.shape]
+        raise SceneError(
+            "mesh.representation",
+            f"got {me.representation!r}; {why} is meshed "
+            + " or ".join(repr(a) for a in allowed)
+            + "; allowed: 'auto', "
+            + ", ".join(repr(a) for a in allowed),
+        )
+    rep = scene.representation
+    R = s.width / 2
+    shape = s.resolved_orifice_shape
+    if s.orifice_position == "bottom":
+        if s.orifice_width >= s.width:
+            raise SceneError(
+                "silo.orifice_width",
+                f"got {s.orifice_width:g} m: the orifice is as wide as the wall; allowed: > 0 "
+                f"and < silo.width ({s.width:g} m)",
+            )
+        if s.orifice_height is not None:
+            raise SceneError(
+                "silo.orifice_height", "only for a lateral orifice (orifice_position = 'lateral')"
+            )
+    else:
+        if s.shape == "hopper":
+            raise SceneError(
+                "silo.orifice_position",
+                "got 'lateral'; a hopper discharges through its outlet; allowed: 'bottom'",
+            )
+        if s.orifice_height is None:
+            raise SceneError(
+                "silo.orifice_height",
+                "missing: a lateral orifice needs the height of its lower edge above the bottom "
+                "(Zhou et al.: 0.02 m)",
+            )
+        top = s.orifice_height + s.orifice_width
+        if top > s.fill_height:
+            raise SceneError(
+                "silo.orifice_height",
+                f"got {s.orifice_height:g} m: the lateral orifice ({s.orifice_height:g} to "
+                f"{top:g} m) reaches above the fill; allowed: >= 0 and <= silo.fill_height - "
+                f"silo.orifice_width ({s.fill_height - s.orifice_width:g} m)",
+            )
+    if s.eccentricity > 0:
+        if s.shape != "cylindrical" or s.orifice_position != "bottom":
+            raise SceneError("silo.eccentricity", "only for a bottom orifice of a cylindrical silo")
+        if s.eccentricity + s.orifice_width / 2 >= R:
+            raise SceneError(
+                "silo.eccentricity",
+                f"got {s.eccentricity:g} m: the eccentric outlet reaches outside the bottom; "
+                f"allowed: >= 0 and < silo.width/2 - silo.orifice_width/2 "
+                f"({R - s.orifice_width / 2:g} m)",
+            )
+    if s.shape == "cylindrical":
+        if s.orifice_position == "bottom" and shape != "circular":
+            raise SceneError(
+                "silo.orifice_shape",
+                f"got {s.orifice_shape!r} for a cylinder's bottom; allowed: 'auto', 'circular'",
+            )
+        if s.orifice_position == "lateral" and shape == "rectangular":
+            if s.orifice_length is None:
+                raise SceneError(
+                    "silo.orifice_length",
+                    "missing: a rectangular lateral orifice on a cylinder needs its arc length W",
+                )
+            if s.orifice_length >= 0.5 * math.pi * R:
+                raise SceneError(
+                    "silo.orifice_length",
+                    f"got {s.orifice_length:g} m: the orifice spans more than a quarter of the "
+                    f"wall; allowed: > 0 and < pi L/8 ({0.5 * math.pi * R:g} m)",
+                )
+        if s.orifice_position == "lateral" and shape == "circular":
+            if s.orifice_width >= 0.8 * s.width:
+                raise SceneError(
+                    "silo.orifice_width",
+                    f"got {s.orifice_width:g} m: a circular lateral orifice as wide as the wall; "
+                    f"allowed: > 0 and < 0.8 silo.width ({0.8 * s.width:g} m)",
+                )
+    if s.shape == "rectangular":
+        if shape != "rectangular":
+            raise SceneError(
+                "silo.orifice_shape",
+                f"got {s.orifice_shape!r} for a rectangular silo; allowed: 'auto', 'rectangular'",
+            )
+        if rep == "3d" and s.thickness is None:
+            raise SceneError(
+                "silo.thickness", "missing: a rectangular silo meshed in 3D needs its thickness W"
+            )
+        if s.orifice_length is not None and s.thickness is not None:
+            if s.orifice_length > s.thickness:
+                raise SceneError(
+                    "silo.orifice_length",
+                    f"got {s.orifice_length:g} m: wider than the silo; allowed: > 0 and <= "
+                    f"silo.thickness ({s.thickness:g} m)",
+                )
+    if s.shape == "hopper":
+        if s.hopper_angle is None:
+            raise SceneError(
+                "silo.hopper_angle",
+                "missing: a hopper needs its wall half-angle from the vertical; "
+                "allowed: (0, 90) deg",
+            )
+        two = (s.hopper_angle_upper is not None, s.transition_width is not None)
+        if two[0] != two[1]:
+            raise SceneError(
+                "silo.transition_width",
+                "a two-angle hopper needs both silo.hopper_angle_upper and silo.transition_width",
+            )
+        if s.transition_width is not None and not (s.orifice_width < s.transition_width < s.width):
+            raise SceneError(
+                "silo.transition_width",
+                f"got {s.transition_width:g} m; allowed: > silo.orifice_width "
+                f"({s.orifice_width:g} m) and < silo.width ({s.width:g} m)",
+            )
+        if s.cone_height >= s.height:
+            raise SceneError(
+                "silo.hopper_angle",
+                f"got {s.hopper_angle:g} deg: the cone is {s.cone_height:g} m high, above the "
+                f"top of the domain ({s.height:g} m); allowed: a steeper angle or a taller silo",
+            )
+    elif s.hopper_angle is not None or s.hopper_angle_upper is not None:
+        raise SceneError("silo.hopper_angle", "only for silo.shape = 'hopper'")
 
 
 def _validate_gas(scene: Scene) -> None:

@@ -1,0 +1,229 @@
+"""The silo geometry library: scenes, representations, meshes (issue 5).
+
+Unit tests check the scene's choice of representation and the errors for bad
+geometry.  Integration tests (``openfoam``) mesh every preset at a coarse
+resolution and require checkMesh to pass, the orifice patch to have the
+orifice's area, and the axisymmetric and 3D meshes of one centred silo to
+hold the same granular volume within 0.5%.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from foamsilo.errors import SceneError
+from foamsilo.mesh import cells_estimate, vertical_rows
+from foamsilo.scene import load_preset, preset_names
+
+# ---------------------------------------------------------------------------- unit
+
+
+@pytest.mark.parametrize(
+    ("preset", "sets", "expected"),
+    [
+        ("zhou-planar", [], "planar"),
+        ("zhou-cyl-bottom", [], "axisymmetric"),
+        ("zhou-cyl-bottom", ["mesh.representation='3d'"], "3d"),
+        ("venier-test1", [], "axisymmetric"),
+        ("venier-test2", [], "3d"),  # eccentric outlet
+        ("zhou-cyl-lateral", [], "3d"),
+        ("zhou-cyl-lateral-rect", [], "3d"),
+        ("zhou-rect-lateral", [], "planar"),
+        ("hopper-conical", [], "axisymmetric"),
+        ("hopper-conical", ["mesh.representation='planar'"], "planar"),
+        ("hopper-two-angle", [], "axisymmetric"),
+    ],
+)
+def test_the_scene_picks_the_cheapest_faithful_representation(preset, sets, expected):
+    assert load_preset(preset, sets).representation == expected
+
+
+@pytest.mark.parametrize(
+    ("preset", "sets", "field", "words"),
+    [
+        # orifice wider than the wall
+        ("zhou-cyl-bottom", ["silo.orifice_width=0.06"], "silo.orifice_width", "< silo.width"),
+        ("hopper-conical", ["silo.orifice_width=0.25"], "silo.orifice_width", "< silo.width"),
+        # lateral orifice above the fill
+        ("zhou-cyl-lateral-rect", ["silo.orifice_height=0.49"], "silo.orifice_height", "fill"),
+        # lateral orifice outside the wall
+        ("zhou-cyl-lateral-rect", ["silo.orifice_length=0.05"], "silo.orifice_length", "quarter"),
+        ("zhou-cyl-lateral", ["silo.orifice_width=0.035"], "silo.orifice_width", "0.8 silo.width"),
+        (
+            "zhou-rect-lateral",
+            ["silo.orifice_length=0.004", "mesh.representation='3d'", "material.wall_friction="],
+            "silo.orifice_length",
+            "silo.thickness",
+        ),
+        # eccentric outlet reaching outside the bottom
+        ("venier-test2", ["silo.eccentricity=1.9"], "silo.eccentricity", "outside the bottom"),
+        # cone angle out of (0, 90)
+        ("hopper-conical", ["silo.hopper_angle=0"], "silo.hopper_angle", "> 0"),
+        ("hopper-conical", ["silo.hopper_angle=90"], "silo.hopper_angle", "< 90"),
+        ("hopper-conical", ["silo.hopper_angle=5"], "silo.hopper_angle", "above the top"),
+        # zero resolution
+        ("zhou-cyl-bottom", ["mesh.cells_across=0"], "mesh.cells_across", ">= 4"),
+        # a representation the shape does not allow
+        ("venier-test2", ["mesh.representation='axisymmetric'"], "mesh.representation", "'3d'"),
+        ("zhou-cyl-bottom", ["mesh.representation='planar'"], "mesh.representation", "allowed"),
+        ("zhou-planar", ["mesh.representation='3d'"], "silo.thickness", "thickness"),
+        # lateral orifice without its height; a hopper with a lateral orifice
+        ("zhou-cyl-lateral", ["silo.orifice_height="], "silo.orifice_height", "missing"),
+        ("hopper-conical", ["silo.orifice_position='lateral'"], "silo.orifice_position", "bottom"),
+        (
+            "hopper-two-angle",
+            ["silo.transition_width=0.25"],
+            "silo.transition_width",
+            "< silo.width",
+        ),
+    ],
+)
+def test_bad_geometry_names_the_parameter_and_the_range(preset, sets, field, words):
+    with pytest.raises(SceneError) as err:
+        load_preset(preset, sets)
+    assert err.value.field == field
+    assert words in str(err.value)
+
+
+def test_hopper_profile_follows_the_wall_angles():
+    s = load_preset("hopper-two-angle").silo
+    (y0, r0), (y1, r1), (y2, r2), (y3, r3) = s.profile
+    assert (y0, r0) == (0.0, 0.015)
+    assert math.degrees(math.atan((r1 - r0) / (y1 - y0))) == pytest.approx(24.0)
+    assert math.degrees(math.atan((r2 - r1) / (y2 - y1))) == pytest.approx(30.0)
+    assert r1 == pytest.approx(0.06) and r2 == pytest.approx(0.1) and y3 == s.height
+
+
+def test_rows_fill_the_height_and_cut_at_every_corner():
+    scene = load_preset("zhou-cyl-lateral-rect")
+    rows = vertical_rows(scene)
+    assert rows[0].y0 == 0.0 and rows[-1].y1 == pytest.approx(scene.silo.height)
+    for a, b in zip(rows[:-1], rows[1:], strict=True):
+        assert a.y1 == pytest.approx(b.y0)
+    edges = {round(r.y0, 9) for r in rows}
+    assert {0.02, 0.04} <= edges  # the lateral orifice's lower and upper edges
+    hopper = load_preset("hopper-two-angle")
+    edges = {round(r.y0, 9) for r in vertical_rows(hopper)}
+    assert all(round(y, 9) in edges for y, _ in hopper.silo.profile[:-1])
+
+
+def test_wedge_fraction_is_the_planar_faced_wedge():
+    scene = load_preset("zhou-cyl-bottom")
+    # a 5 degree wedge with planar faces holds sin(5 deg)/(2 pi) of the disk
+    assert scene.mesh_fraction == pytest.approx(math.sin(math.radians(5)) / (2 * math.pi))
+
+
+# ---------------------------------------------------------------------------- integration
+
+COARSE = {
+    "zhou-planar": 16,
+    "zhou-planar-gas": 16,
+    "zhou-rect-bottom": 16,
+    "zhou-rect-lateral": 16,
+    "zhou-cyl-bottom": 16,
+    "zhou-cyl-lateral": 12,
+    "zhou-cyl-lateral-rect": 16,
+    "venier-test1": 16,
+    "venier-test2": 20,
+    "hopper-conical": 20,
+    "hopper-two-angle": 20,
+}
+
+
+def _patch_area(msh, name: str) -> float:
+    """Area of a physical surface group of a gmsh 2.2 mesh (quads and triangles)."""
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(msh))
+        tags = {
+            n: t
+            for d, t in gmsh.model.getPhysicalGroups(2)
+            for n in [gmsh.model.getPhysicalName(d, t)]
+        }
+        area = 0.0
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(2, tags[name]):
+            types, _, nodes = gmsh.model.mesh.getElements(2, ent)
+            for typ, conn in zip(types, nodes, strict=True):
+                k = {2: 3, 3: 4}[int(typ)]
+                xyz = np.array([gmsh.model.mesh.getNode(int(n))[0] for n in conn]).reshape(-1, k, 3)
+                # fan triangulation of each (planar) face
+                for i in range(1, k - 1):
+                    a = xyz[:, i] - xyz[:, 0]
+                    b = xyz[:, i + 1] - xyz[:, 0]
+                    area += 0.5 * float(np.sum(np.linalg.norm(np.cross(a, b), axis=1)))
+        return area
+    finally:
+        gmsh.finalize()
+
+
+def _orifice_area(scene) -> float:
+    s = scene.silo
+    rep = scene.representation
+    if rep == "planar":
+        return s.orifice_width * scene.cell_size
+    full = (
+        math.pi * s.orifice_width**2 / 4
+        if s.resolved_orifice_shape == "circular"
+        else s.orifice_width * (s.orifice_length or s.thickness or 0.0)
+    )
+    return full * (scene.mesh_fraction if rep == "axisymmetric" else 1.0)
+
+
+@pytest.mark.openfoam
+@pytest.mark.parametrize("preset", sorted(preset_names()))
+@pytest.mark.parametrize("rep", ["auto", "3d"])
+def test_every_preset_meshes_and_passes_checkmesh(preset, rep, tmp_path, openfoam):
+    from foamsilo.case import create_case
+
+    if preset not in COARSE:
+        pytest.fail(f"new preset {preset!r}: give it a coarse resolution in COARSE")
+    sets = [f"mesh.cells_across={COARSE[preset]}"]
+    if rep == "3d":
+        base = load_preset(preset)
+        if base.representation == "3d" or "3d" not in base.allowed_representations:
+            pytest.skip("auto is already 3D")
+        if base.silo.shape == "rectangular":
+            sets += ["material.wall_friction=", "gas.mode='open-top'", "gas.q_air_lpm=",
+                     "gas.q_air_scaled=", "silo.thickness=0.01"]  # fmt: skip
+        sets.append("mesh.representation='3d'")
+    scene = load_preset(preset, sets)
+    case = create_case(scene, tmp_path / preset, openfoam)
+    m = case.mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.representation == scene.representation
+    assert m.check.max_non_orthogonality < 65
+    if m.cell_kind.startswith("hexahedral") and "prisms" not in m.cell_kind:
+        assert set(m.check.cell_types) == {"hexahedra"}
+    if scene.silo.eccentricity == 0 and m.cell_kind != "tetrahedral":
+        assert m.cells == cells_estimate(scene)
+    # the orifice patch is the orifice: structured polygons lose at most 0.3% of
+    # a disk, the unstructured (>= 20-gon) 2%; a disk cut out of a curved wall is
+    # larger than the flat disk (here by 1.7%)
+    area = _patch_area(m.msh_file, "orifice")
+    tol = 0.003
+    if scene.representation == "3d":
+        tol = 0.03 if m.cell_kind == "tetrahedral" else (0.02 if scene.silo.eccentricity else 0.01)
+    assert area == pytest.approx(_orifice_area(scene), rel=tol)
+
+
+@pytest.mark.openfoam
+def test_axisymmetric_and_3d_meshes_hold_the_same_granular_volume(tmp_path, openfoam):
+    from foamsilo.case import create_case
+    from foamsilo.foam import granular_volume
+
+    volumes = {}
+    for rep in ("axisymmetric", "3d"):
+        scene = load_preset(
+            "zhou-cyl-bottom", ["mesh.cells_across=16", f"mesh.representation='{rep}'"]
+        )
+        case = create_case(scene, tmp_path / rep, openfoam)
+        volumes[rep] = granular_volume(openfoam, case.path) / scene.mesh_fraction
+    exact = math.pi * 0.03**2 * 0.5
+    assert volumes["axisymmetric"] == pytest.approx(exact, rel=2e-3)
+    assert volumes["3d"] == pytest.approx(volumes["axisymmetric"], rel=5e-3)
