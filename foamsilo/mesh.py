@@ -524,7 +524,8 @@ def _element_kinds(gmsh: object) -> dict[str, int]:
     out: dict[str, int] = {}
     types, tags, _ = gmsh.model.mesh.getElements(3)  # type: ignore[attr-defined]
     for t, tg in zip(types, tags, strict=True):
-        out[names.get(int(t), f"type{int(t)}")] = out.get(names.get(int(t), ""), 0) + len(tg)
+        name = names.get(int(t), f"type{int(t)}")
+        out[name] = out.get(name, 0) + len(tg)
     return out
 
 
