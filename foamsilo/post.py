@@ -232,12 +232,18 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     smooth = _smooth(tt, qq, width)
     later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
     q_ref = float(np.median(qq[later]))
-    # the window opens when the smoothed rate first comes within the band of
-    # the plateau (the end of the start-up transient)
-    near = np.flatnonzero(
-        (np.abs(smooth - q_ref) <= STEADY_TOLERANCE * abs(q_ref)) & (tt >= tt[idx[0]])
-    )
-    i0 = int(near[0]) if near.size else i1
+    # the window opens when the smoothed rate enters the band of the plateau
+    # for good (the end of the start-up transient): an overshooting start-up
+    # crosses the band once or twice before it settles. Only complete
+    # smoothing windows are judged (the last half-width is averaged short).
+    judged = (tt >= tt[idx[0]]) & (tt <= tt[-1] - width / 2)
+    outside = np.flatnonzero(judged & (np.abs(smooth - q_ref) > STEADY_TOLERANCE * abs(q_ref)))
+    if not judged.any():
+        i0 = i1
+    elif outside.size:
+        i0 = int(outside[-1]) + 1
+    else:
+        i0 = int(np.flatnonzero(judged)[0])
     win = slice(i0, i1 + 1)
     tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
     if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:

@@ -9,12 +9,18 @@ from foamsilo.post import Discharge, find_steady, read_function_object
 from foamsilo.scene import load_preset
 
 
-def synthetic(q_plateau: float, t_end: float, tau: float, drift: float = 0.0) -> Discharge:
-    """Q(t) = Q0 (1 - exp(-t/tau)) (1 + drift t), volume from exact integration."""
+def synthetic(
+    q_plateau: float, t_end: float, tau: float, drift: float = 0.0, overshoot: float = 0.0
+) -> Discharge:
+    """Q(t) = Q0 (1 - exp(-t/tau)) (1 + drift t) (1 + overshoot e^(-t/0.08) sin(t/0.02)).
+
+    The volume comes from exact integration of the same series.
+    """
     scene = load_preset("zhou-planar")
     t = np.linspace(1e-4, t_end, 4000)
     dt = np.diff(np.concatenate([[0.0], t]))
     q = q_plateau * (1 - np.exp(-t / tau)) * (1 + drift * t)
+    q *= 1 + overshoot * np.exp(-t / 0.08) * np.sin(t / 0.02)
     v0 = scene.silo.width * scene.silo.fill_height
     v = v0 - np.cumsum(q * dt)
     return scene, Discharge(t, dt, q, v, v0, 1.0, 1.0)
@@ -41,6 +47,17 @@ def test_grains_through_the_top_count_in_the_mass_balance():
     d.top_flux = lost
     assert d.mass_balance_error < 1e-12
     assert d.top_loss == pytest.approx(1e-4 * 0.1 / d.initial_volume, rel=1e-2)
+
+
+def test_overshooting_start_up_is_left_out_of_the_window():
+    # a damped oscillation (50% swing) crosses the plateau band early; the
+    # window must open where the smoothed rate enters the band for good, not
+    # at its first crossing (which keeps the swing in and calls it unsteady)
+    scene, d = synthetic(q_plateau=1e-3, t_end=1.0, tau=0.02, overshoot=0.5)
+    st = find_steady(d, scene)
+    assert st.steady, st.reason
+    assert st.t_start > 0.2  # the smoothed swing leaves the 2% band for good at 0.23 s
+    assert st.q == pytest.approx(1e-3, rel=1e-3)
 
 
 def test_drifting_rate_is_not_steady():

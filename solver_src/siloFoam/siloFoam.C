@@ -48,6 +48,7 @@ Description
 #include "fvOptions.H"
 #include "fvcSmooth.H"
 #include "fixedGradientFvPatchFields.H"
+#include "extrapolatedCalculatedFvPatchFields.H"
 
 // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
 
@@ -71,6 +72,7 @@ int main(int argc, char *argv[])
     #include "createFields.H"
     #include "createAlphaFluxes.H"
     #include "createPorePressure.H"
+    #include "faceReconstruction.H"
 
     turbulence->validate();
 
