@@ -428,3 +428,125 @@ def mesh_report(result: dict[str, Any]) -> str:
             f"| {c['max_skewness']:.2f} |"
         )
     return "\n".join(lines)
+
+
+def _direct_run(case: Path, of: OpenFOAM, executable: Path) -> tuple[float, int]:
+    """Run siloFoam straight from a subprocess (no PyFoam): wall seconds and steps."""
+    env = of.runtime_env()
+    t0 = time.perf_counter()
+    with open(case / "log.direct", "w") as log:
+        proc = subprocess.run(
+            [str(executable), "-case", str(case)], env=env, stdout=log, stderr=subprocess.STDOUT
+        )
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise FoamsiloError(f"direct siloFoam run failed in {case} (see log.direct)")
+    steps = sum(1 for line in (case / "log.direct").open() if line.startswith("Time = "))
+    return wall, steps
+
+
+def bench_mpi(
+    ranks: list[int], target_cells: int, end_time: float, work_dir: Path
+) -> dict[str, Any]:
+    """MPI speed-up and the cost of the Python runner on a 3D cylindrical silo.
+
+    The lab silo of Zhou et al. (Table I, L = 60 mm, D = 10 mm) meshed in 3D
+    (O-grid hexahedra) at the resolution closest to ``target_cells``, from
+    fill to ``end_time``, once per rank count through :func:`run_solver`
+    (decomposition excluded: it is timed apart), and once serially by calling
+    siloFoam directly, for the runner's overhead. Times are solver wall
+    seconds per time step (the step count can differ by a step or two between
+    decompositions: round-off).
+    """
+    from foamsilo.run import prepare_decomposition
+
+    of = find_openfoam()
+    solver = ensure_solver(of=of)
+    preset = "zhou-cyl-bottom"
+    sets = ["mesh.representation='3d'", f"run.end_time={end_time}"]
+    sets.append(f"run.write_interval={end_time}")
+    n, _ = _cells_across_for(preset, sets, target_cells)
+    scene = load_preset(preset, [*sets, f"mesh.cells_across={n}"])
+    base = create_case(scene, Path(work_dir) / "base", of, overwrite=True)
+    rows = []
+    for np_ in ranks:
+        case = Path(work_dir) / f"np{np_}"
+        shutil.rmtree(case, ignore_errors=True)
+        shutil.copytree(base.path, case)
+        t0 = time.perf_counter()
+        prepare_decomposition(case, of, np_)
+        t_dec = time.perf_counter() - t0
+        res = run_solver(case, of, solver, n_procs=np_)
+        rows.append(
+            {
+                "ranks": np_,
+                "steps": res.steps,
+                "wall_s": round(res.wall_seconds, 2),
+                "ms_per_step": round(1000 * res.wall_seconds / res.steps, 2),
+                "decompose_s": round(t_dec, 2),
+            }
+        )
+        shutil.rmtree(case, ignore_errors=True)
+    one = next((r for r in rows if r["ranks"] == 1), rows[0])
+    for r in rows:
+        r["speedup"] = round(one["ms_per_step"] / r["ms_per_step"] * one["ranks"], 3)
+    # the Python runner against the solver alone, serial, same case
+    direct = Path(work_dir) / "direct"
+    shutil.rmtree(direct, ignore_errors=True)
+    shutil.copytree(base.path, direct)
+    d_wall, d_steps = _direct_run(direct, of, solver.executable)
+    via = Path(work_dir) / "runner"
+    shutil.rmtree(via, ignore_errors=True)
+    shutil.copytree(base.path, via)
+    r_res = run_solver(via, of, solver)
+    overhead = {
+        "direct_wall_s": round(d_wall, 2),
+        "direct_steps": d_steps,
+        "runner_wall_s": round(r_res.wall_seconds, 2),
+        "runner_steps": r_res.steps,
+        "overhead": round((r_res.wall_seconds / r_res.steps) / (d_wall / d_steps) - 1, 4),
+    }
+    for p in (direct, via, base.path):
+        shutil.rmtree(p, ignore_errors=True)
+    return {
+        "benchmark": "mpi",
+        "preset": preset,
+        "cells_across": n,
+        "cells": base.mesh.cells if base.mesh else 0,
+        "end_time_s": end_time,
+        "machine": machine_info(),
+        "commit": _git_commit(),
+        "rows": rows,
+        "runner": overhead,
+    }
+
+
+def mpi_report(result: dict[str, Any]) -> str:
+    """Markdown tables of an MPI benchmark."""
+    m = result["machine"]
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; commit {result['commit']}; "
+        f"{result['preset']} in 3D, {result['cells']:,} cells ({result['cells_across']} across), "
+        f"0 to {result['end_time_s']} s.",
+        "",
+        "| ranks | steps | solver wall [s] | ms/step | speed-up | decomposePar [s] |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in result["rows"]:
+        lines.append(
+            f"| {r['ranks']} | {r['steps']} | {r['wall_s']:.1f} | {r['ms_per_step']:.1f} "
+            f"| {r['speedup']:.2f} | {r['decompose_s']:.1f} |"
+        )
+    o = result["runner"]
+    lines += [
+        "",
+        "| serial run | steps | wall [s] | ms/step |",
+        "| --- | --- | --- | --- |",
+        f"| siloFoam alone | {o['direct_steps']} | {o['direct_wall_s']:.1f} "
+        f"| {1000 * o['direct_wall_s'] / o['direct_steps']:.1f} |",
+        f"| through foamsilo (PyFoam) | {o['runner_steps']} | {o['runner_wall_s']:.1f} "
+        f"| {1000 * o['runner_wall_s'] / o['runner_steps']:.1f} |",
+        "",
+        f"Runner overhead per step: {o['overhead']:+.1%}.",
+    ]
+    return "\n".join(lines)

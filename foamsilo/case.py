@@ -9,6 +9,7 @@ normal OpenFOAM case: ``siloFoam`` runs in it by hand, ParaView opens
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import shutil
@@ -144,6 +145,14 @@ def template_list(scene: Scene) -> list[str]:
     if scene.wall_friction:
         names.append("constant/wallFrictionProperties")
     return names
+
+
+def decompose_dict(scene: Scene, n_procs: int) -> str:
+    """``system/decomposeParDict`` for ``n_procs`` ranks (whatever the scene's run.n_procs)."""
+    ctx = template_context(scene)
+    ctx["run"] = dataclasses.replace(scene.run, n_procs=n_procs)
+    name = "system/decomposeParDict.j2"
+    return _environment().get_template(name).render(template_name=name, **ctx)
 
 
 def render_templates(scene: Scene, case: Path) -> list[str]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import tempfile
 import time
@@ -148,6 +149,21 @@ def _run_finished(case: Path) -> bool:
         return False
     end = _control_value(case, "endTime")
     return float(times[-1]) >= end * (1 - 1e-9) and (case / "log.siloFoam").exists()
+
+
+def _run_started(case: Path) -> str | None:
+    """Latest complete time directory after 0 of an unfinished run, or None."""
+    from foamsilo.run import time_directories
+
+    later = [t for t in time_directories(case) if float(t) > 0]
+    return later[-1] if later else None
+
+
+def _write_whole(path: Path, text: str) -> None:
+    """Write a file whole or not at all (a temporary file, then a rename)."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
 
 
 # ----------------------------------------------------------------------------- commands
@@ -389,14 +405,17 @@ def _print_summary(summary: dict[str, Any], run: dict[str, Any] | None) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Create (if needed), run and post-process a case."""
-    from foamsilo.case import create_case, read_metadata, scene_digest
+    from foamsilo.case import SCENE_FILE, create_case, read_metadata, scene_digest
     from foamsilo.post import summarize
-    from foamsilo.run import run_solver
+    from foamsilo.run import reconstruct, run_solver
+    from foamsilo.scene import load_scene_file
     from foamsilo.solver import ensure_solver
     from foamsilo.toolchain import find_openfoam
 
-    if args.np and args.np > 1:
-        raise FoamsiloError("parallel runs (--np > 1) are not available yet; use --np 1")
+    if args.np is not None and args.np < 1:
+        raise SceneError("--np", f"{args.np} ranks: must be >= 1")
+    if args.hostfile is not None and not args.hostfile.is_file():
+        raise FoamsiloError(f"--hostfile {args.hostfile}: no such file")
     of = find_openfoam()
     spec = Path(args.scene)
     con = _console()
@@ -430,19 +449,70 @@ def cmd_run(args: argparse.Namespace) -> int:
     if _run_finished(case_dir) and not args.rerun:
         say("run already finished; post-processing")
     else:
+        started = _run_started(case_dir)
+        if started and not (args.resume or args.rerun):
+            raise FoamsiloError(
+                f"{case_dir} holds an interrupted run (latest complete time {started} s): "
+                "--resume continues it, --overwrite starts over"
+            )
+        n_procs = args.np or load_scene_file(case_dir / SCENE_FILE).run.n_procs
         build = ensure_solver(of=of, log=say)
+        if started:
+            say(f"resuming from t = {started} s")
         update, stop = _progress_printer(args.quiet or args.json)
         try:
-            result = run_solver(case_dir, of, build, progress=update)
+            result = run_solver(
+                case_dir, of, build, progress=update, n_procs=n_procs, hostfile=args.hostfile
+            )
         finally:
             stop()
+        if args.reconstruct and n_procs > 1:
+            say("reconstructing the processor directories")
+            reconstruct(case_dir, of)
         run_info = result.as_dict()
-        (case_dir / "run.json").write_text(json.dumps(run_info, indent=2))
+        _write_whole(case_dir / "run.json", json.dumps(run_info, indent=2))
     if run_info is None and (case_dir / "run.json").exists():
         run_info = json.loads((case_dir / "run.json").read_text())
     summary = summarize(case_dir, run_info)
     _emit(args, {"ok": True, **summary}, lambda: _print_summary(summary, run_info))
     return 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Run a sweep file's cases under its CPU budget; resumable."""
+    from foamsilo.sweep import load_sweep, run_sweep
+
+    sweep = load_sweep(Path(args.sweep))
+    say = (lambda m: None) if args.json or args.quiet else (lambda m: _console().print(m))
+    rows = run_sweep(sweep, log=say)
+    failed = [r for r in rows if r["status"] != "ok"]
+
+    def human() -> None:
+        from rich.table import Table
+
+        # the columns that vary between cases
+        keys = [
+            k
+            for k in (sweep.cases[0].overrides if sweep.cases else {})
+            if len({repr(c.overrides.get(k)) for c in sweep.cases}) > 1
+        ]
+        tab = Table(title=f"sweep {sweep.name} ({sweep.output}/summary.csv)")
+        for k in ["case", *keys, "status", "Q", "Q_dimensionless"]:
+            tab.add_column(k)
+        for r in rows:
+            q = r.get("Q")
+            qd = r.get("Q_dimensionless")
+            tab.add_row(
+                str(r["case"]),
+                *[str(r.get(k)) for k in keys],
+                r["status"],
+                f"{q:.5g}" if isinstance(q, float) else "-",
+                f"{qd:.4f}" if isinstance(qd, float) else "-",
+            )
+        _console().print(tab)
+
+    _emit(args, {"ok": not failed, "output": str(sweep.output), "cases": rows}, human)
+    return 0 if not failed else 1
 
 
 def cmd_post(args: argparse.Namespace) -> int:
@@ -479,6 +549,21 @@ def cmd_bench(args: argparse.Namespace) -> int:
         text = mesh_report(res)
         if args.log:
             write_result(res, Path(args.log).with_name("mesh.jsonl"))
+        if args.output:
+            Path(args.output).write_text(text + "\n")
+        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
+        return 0
+    if args.suite == "mpi":
+        from foamsilo.bench import bench_mpi, mpi_report
+
+        ranks = [int(r) for r in args.ranks]
+        target = int(args.cells[0]) if args.cells != ["32", "64"] else 65000
+        end = args.end_time if args.end_time != 1.0 else 0.02
+        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
+            res = bench_mpi(ranks, target, end, Path(args.work_dir) if args.work_dir else Path(tmp))
+        text = mpi_report(res)
+        if args.log:
+            write_result(res, Path(args.log).with_name("mpi.jsonl"))
         if args.output:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
@@ -648,8 +733,30 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument(
         "--rerun", action="store_true", help="run the solver even if the case already finished"
     )
-    sp.add_argument("--np", type=int, default=1, help="MPI ranks (1: serial)")
+    sp.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted run from its latest complete time directory",
+    )
+    sp.add_argument(
+        "--np", type=int, default=None, help="MPI ranks (default: the scene's run.n_procs)"
+    )
+    sp.add_argument(
+        "--hostfile",
+        type=Path,
+        default=None,
+        help="Open MPI hostfile (one host per line and slot) for runs across machines",
+    )
+    sp.add_argument(
+        "--reconstruct",
+        action="store_true",
+        help="after a parallel run, merge the processor directories (reconstructPar)",
+    )
     sp.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    sp = add("sweep", cmd_sweep, "run the cases of a sweep file under a CPU budget (resumable)")
+    sp.add_argument("sweep", help="sweep TOML file (see foamsilo/sweep.py for the format)")
+    sp.add_argument("--quiet", action="store_true", help="no per-case messages")
 
     sp = add("post", cmd_post, "post-process a case: Q(t), steady Q, plot, summary")
     sp.add_argument("case", help="case directory")
@@ -684,11 +791,14 @@ def build_parser() -> argparse.ArgumentParser:
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
         "suite",
-        choices=["solver", "gas", "mesh", "report"],
+        choices=["solver", "gas", "mesh", "mpi", "report"],
         help="solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
         "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
-        "1000000); report: tables from --log",
+        "1000000); mpi: speed-up over --ranks and the runner's overhead on a 3D silo "
+        "(--cells: target cells, default 65000; --end-time default 0.02 s); "
+        "report: tables from --log",
     )
+    sp.add_argument("--ranks", nargs="+", default=["1", "2"], help="mpi: MPI rank counts")
     sp.add_argument("-o", "--output", help="report: write the Markdown here")
     sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")
     sp.add_argument("--end-time", type=float, default=1.0, help="simulated time per run [s]")

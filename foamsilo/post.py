@@ -232,18 +232,21 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     smooth = _smooth(tt, qq, width)
     later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
     q_ref = float(np.median(qq[later]))
-    # the window opens when the smoothed rate enters the band of the plateau
-    # for good (the end of the start-up transient): an overshooting start-up
-    # crosses the band once or twice before it settles. Only complete
-    # smoothing windows are judged (the last half-width is averaged short).
-    judged = (tt >= tt[idx[0]]) & (tt <= tt[-1] - width / 2)
-    outside = np.flatnonzero(judged & (np.abs(smooth - q_ref) > STEADY_TOLERANCE * abs(q_ref)))
-    if not judged.any():
-        i0 = i1
-    elif outside.size:
-        i0 = int(outside[-1]) + 1
-    else:
-        i0 = int(np.flatnonzero(judged)[0])
+    # the window opens when the smoothed rate first comes within the band of
+    # the plateau (the end of the start-up transient) and no longer leaves
+    # the wider excursion band: an overshooting start-up crosses the plateau
+    # before it settles, while a noisy plateau wanders a little (2-5%) and
+    # must not push the start back. Only complete smoothing windows are
+    # judged for excursions (the last half-width is averaged short).
+    dev = np.abs(smooth - q_ref)
+    usable_now = tt >= tt[idx[0]]
+    near = np.flatnonzero((dev <= STEADY_TOLERANCE * abs(q_ref)) & usable_now)
+    i0 = int(near[0]) if near.size else i1
+    judged = usable_now & (tt <= tt[-1] - width / 2)
+    wild = np.flatnonzero(judged & (dev > STEADY_MAX_EXCURSION * abs(q_ref)))
+    if wild.size and near.size:
+        later_near = near[near > wild[-1]]
+        i0 = int(later_near[0]) if later_near.size else i1
     win = slice(i0, i1 + 1)
     tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
     if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:
@@ -258,13 +261,20 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     std = float(np.sqrt(np.sum((qw - mean) ** 2 * dtw) / np.sum(dtw)))
     slope = np.polyfit(tw, qw, 1)[0]
     drift = float(slope * (tw[-1] - tw[0]) / mean) if mean else math.nan
+    # standard error of that drift: the rate's fluctuations are correlated
+    # over about one smoothing width, so the window holds ~span/width
+    # independent samples, not one per time step
+    span = tw[-1] - tw[0]
+    n_eff = max(span / width, 2.0)
+    drift_se = float(std * math.sqrt(12.0 / n_eff) / abs(mean)) if mean else math.nan
     q_vol = float(-np.polyfit(tw, vw, 1)[0] * d.density)
     # largest excursion of the smoothed rate, where its window is complete
     complete = (tt >= tw[0]) & (tt <= tt[-1] - width / 2)
     band = float(np.max(np.abs(smooth[complete] - mean)) / mean) if complete.any() else 0.0
     reasons = []
-    if abs(drift) >= STEADY_MAX_DRIFT:
-        reasons.append(f"Q drifts by {drift:.1%} over the window")
+    # a drift counts when it is both large and more than the noise explains
+    if abs(drift) >= STEADY_MAX_DRIFT and abs(drift) > 2 * drift_se:
+        reasons.append(f"Q drifts by {drift:.1%} over the window (noise: {drift_se:.1%})")
     if band >= STEADY_MAX_EXCURSION:
         reasons.append(f"the smoothed rate wanders by {band:.1%}")
     return SteadyState(

@@ -23,6 +23,7 @@ import os
 import re
 import resource
 import shlex
+import shutil
 import sys
 import time
 from collections.abc import Callable
@@ -248,6 +249,8 @@ class RunResult:
         Wall and CPU time of the solver process.
     max_rss_mb
         Peak resident memory of the solver [MB] (None if unknown).
+    n_procs
+        MPI ranks it ran on (1: serial).
     """
 
     case: Path
@@ -258,6 +261,7 @@ class RunResult:
     wall_seconds: float
     cpu_seconds: float
     max_rss_mb: float | None
+    n_procs: int = 1
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form."""
@@ -266,17 +270,82 @@ class RunResult:
         return d
 
 
-def time_directories(case: Path) -> list[str]:
-    """Time directories of a case with a complete U field, oldest first."""
+#: Fields a time directory must hold, whole, to restart from it
+RESTART_FIELDS = ("U", "p_rgh", "alpha.granular", "phi", "uniform/time")
+_FOOTER = b"// ************************************************************************* //"
+
+
+def _written_whole(path: Path) -> bool:
+    """Whether an OpenFOAM file ends with its footer (a killed write does not)."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as fh:
+            fh.seek(max(0, size - 200))
+            return _FOOTER in fh.read()
+    except OSError:
+        return False
+
+
+def _time_dirs(root: Path) -> list[Path]:
     out = []
-    for p in Path(case).iterdir():
+    for p in Path(root).iterdir():
         try:
             float(p.name)
         except ValueError:
             continue
-        if p.is_dir() and (p / "U").exists() and (p / "alpha.granular").exists():
-            out.append(p.name)
-    return sorted(out, key=float)
+        if p.is_dir():
+            out.append(p)
+    return sorted(out, key=lambda p: float(p.name))
+
+
+def _complete(tdir: Path) -> bool:
+    if float(tdir.name) == 0.0:
+        return (tdir / "U").exists() and (tdir / "alpha.granular").exists()
+    return all(_written_whole(tdir / f) for f in RESTART_FIELDS)
+
+
+def processor_dirs(case: Path) -> list[Path]:
+    """Return the ``processorN`` directories of a decomposed case, in rank order."""
+    procs = [p for p in Path(case).glob("processor*") if p.name[9:].isdigit()]
+    return sorted(procs, key=lambda p: int(p.name[9:]))
+
+
+def time_directories(case: Path) -> list[str]:
+    """Complete time directories of a case, oldest first.
+
+    A time directory is complete when the fields a restart needs are there
+    and written whole. In a decomposed case a time counts when every
+    processor holds it complete, or when it was reconstructed.
+    """
+    names = {p.name for p in _time_dirs(case) if _complete(p)}
+    procs = processor_dirs(case)
+    if procs:
+        per_rank = [{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs]
+        names |= set.intersection(*per_rank)
+    return sorted(names, key=float)
+
+
+def prune_incomplete_times(case: Path) -> list[str]:
+    """Remove time directories after the last complete one (a killed write).
+
+    Returns the names removed. The solver restarts from the latest time
+    directory it finds (``startFrom latestTime``), so a half-written one must
+    not be left for it.
+    """
+    procs = processor_dirs(case)
+    keep_root = {p.name for p in _time_dirs(case) if _complete(p)}
+    keep_procs = (
+        set.intersection(*[{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs])
+        if procs
+        else set()
+    )
+    removed = []
+    for root, keep in [(Path(case), keep_root), *[(pd, keep_procs) for pd in procs]]:
+        for p in _time_dirs(root):
+            if float(p.name) > 0 and p.name not in keep:
+                shutil.rmtree(p)
+                removed.append(str(p.relative_to(case)))
+    return removed
 
 
 def _control_value(case: Path, key: str, default: float = 0.0) -> float:
@@ -288,6 +357,70 @@ def _control_value(case: Path, key: str, default: float = 0.0) -> float:
 ProgressCallback = Callable[[LogMonitor, float], None]
 
 
+def _latest_root_time(case: Path) -> float:
+    names = [p.name for p in _time_dirs(case) if _complete(p)]
+    return max((float(n) for n in names), default=0.0)
+
+
+def _latest_processor_time(case: Path) -> float:
+    procs = processor_dirs(case)
+    if not procs:
+        return -1.0
+    common = set.intersection(*[{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs])
+    return max((float(n) for n in common), default=-1.0)
+
+
+def _all_local(hostfile: Path | None) -> bool:
+    """Whether every host of an Open MPI hostfile is this machine (no hostfile: yes)."""
+    if hostfile is None:
+        return True
+    import socket
+
+    local = {"localhost", "127.0.0.1", socket.gethostname(), socket.getfqdn()}
+    for line in Path(hostfile).read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words and words[0] not in local:
+            return False
+    return True
+
+
+def reconstruct(case: Path, of: OpenFOAM, *, latest_only: bool = False) -> None:
+    """Merge the processor directories back into time directories (reconstructPar)."""
+    from foamsilo.foam import run_utility
+
+    args = ["-latestTime"] if latest_only else ["-newTimes"]
+    run_utility(of, case, "reconstructPar", *args, log_name="reconstructPar")
+
+
+def prepare_decomposition(case: Path, of: OpenFOAM, n_procs: int) -> None:
+    """Make ``case`` ready to run on ``n_procs`` ranks (or serially for 1).
+
+    A decomposed case with the right number of ranks is left as it is (a
+    resumed parallel run goes on from the processors' latest time). Anything
+    else is first reconstructed up to its latest time, so that a run can be
+    resumed with another number of ranks, then decomposed afresh.
+    """
+    from foamsilo.foam import run_utility
+
+    procs = processor_dirs(case)
+    if procs and len(procs) == n_procs:
+        return
+    if procs:
+        if _latest_processor_time(case) > _latest_root_time(case):
+            reconstruct(case, of, latest_only=True)
+        for pd in procs:
+            shutil.rmtree(pd)
+    if n_procs == 1:
+        return
+    from foamsilo.case import SCENE_FILE, decompose_dict
+    from foamsilo.scene import load_scene_file
+
+    # horizontal slices of equal cell counts (templates/system/decomposeParDict.j2)
+    scene = load_scene_file(case / SCENE_FILE)
+    (case / "system" / "decomposeParDict").write_text(decompose_dict(scene, n_procs))
+    run_utility(of, case, "decomposePar", "-force", "-latestTime", log_name="decomposePar")
+
+
 def run_solver(
     case: Path,
     of: OpenFOAM,
@@ -295,8 +428,17 @@ def run_solver(
     *,
     progress: ProgressCallback | None = None,
     max_wall_seconds: float | None = None,
+    n_procs: int = 1,
+    hostfile: Path | None = None,
 ) -> RunResult:
-    """Run siloFoam serially in ``case`` through PyFoam.
+    """Run siloFoam in ``case`` through PyFoam, serially or with MPI.
+
+    The run starts from the latest complete time directory (a fresh case:
+    0); time directories a killed run left half-written are removed first.
+    With ``n_procs > 1`` the case is decomposed (scotch) unless it already
+    is for that many ranks, and the solver runs under mpirun through
+    PyFoam's parallel machinery; the processor directories are kept (see
+    :func:`reconstruct`).
 
     Parameters
     ----------
@@ -311,6 +453,12 @@ def run_solver(
     max_wall_seconds
         Stop the solver after this much wall time (a run that crawls on with
         a shrinking step must not hang a sweep).
+    n_procs
+        MPI ranks (1: serial, no mpirun).
+    hostfile
+        Open MPI hostfile (one host name per line, one line per slot) for
+        runs across machines; the case directory must be visible at the same
+        path on every host.
 
     Raises
     ------
@@ -324,14 +472,19 @@ def run_solver(
     from PyFoam.Execution.BasicRunner import BasicRunner
 
     case = Path(case).resolve()
+    if n_procs < 1:
+        raise FoamsiloError(f"n_procs = {n_procs}: must be >= 1")
+    if hostfile is not None and not Path(hostfile).is_file():
+        raise FoamsiloError(f"hostfile {hostfile}: no such file")
+    prune_incomplete_times(case)
+    prepare_decomposition(case, of, n_procs)
     end_time = _control_value(case, "endTime")
     monitor = LogMonitor(
         _control_value(case, "maxCo"),
         _control_value(case, "maxAlphaCo"),
         _control_value(case, "maxGranularCo"),
     )
-    times = time_directories(case)
-    start_time = float(times[-1]) if times else 0.0
+    start_time = max(_latest_root_time(case), _latest_processor_time(case), 0.0)
     log = open(case / LOG_NAME, "a" if start_time > 0 else "w")  # noqa: SIM115
 
     from PyFoam.RunDictionary.SolutionDirectory import SolutionDirectory
@@ -344,34 +497,58 @@ def run_solver(
             # the case already has case.foam; no second ParaView stub
             return SolutionDirectory(self.dir, archive=archive, paraviewLink=False, parallel=True)
 
+        def __init__(self, **kw: Any) -> None:
+            super().__init__(**kw)
+            # 'exec' makes the solver (or mpirun) the process PyFoam signals,
+            # not the shell that starts it (killing the shell leaves it running)
+            if not self.run.cmdline.startswith("exec "):
+                self.run.cmdline = "exec " + self.run.cmdline
+
         def lineHandle(self, line: str) -> None:
             log.write(line + "\n")
             n_before = len(monitor.steps)
             monitor.feed(line)
             if monitor.divergence is not None or (monitor.fatal and len(monitor.fatal) > 40):
-                self.run.interrupt(pass_int=False)  # SIGKILL: stop now, keep the case
+                # serial: SIGKILL, stop now; mpirun: SIGINT, which it passes
+                # on to the ranks (a killed mpirun leaves them running)
+                self.run.interrupt(pass_int=parallel)
                 return
             if max_wall_seconds and time.perf_counter() - started > max_wall_seconds:
                 if not timed_out:
                     timed_out.append(monitor.current_time)
-                    self.run.interrupt(pass_int=False)
+                    self.run.interrupt(pass_int=parallel)
                 return
             if progress is not None and len(monitor.steps) != n_before:
                 progress(monitor, end_time)
 
+    parallel = n_procs > 1
     saved = dict(os.environ)
+    env = of.runtime_env()  # before the clear: it starts from os.environ
     os.environ.clear()
-    os.environ.update(of.runtime_env())
+    os.environ.update(env)
+    if parallel and hostfile is None and n_procs > (os.cpu_count() or 1):
+        os.environ.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+    if parallel and _all_local(hostfile):
+        # Open MPI refuses to start when it finds no usable remote shell, even
+        # if every rank is local and it would never call one (other hosts do
+        # need ssh: then the user's setting stands)
+        os.environ.setdefault("OMPI_MCA_plm_rsh_agent", shutil.which("false") or "/bin/false")
     usage0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     try:
         # 'exec' makes the solver the process PyFoam signals (not a shell);
         # PyFoam's own messages go to stderr so that --json stdout stays clean
+        lam = None
+        if parallel:
+            from PyFoam.Execution.ParallelExecution import LAMMachine
+
+            lam = LAMMachine(machines=str(hostfile) if hostfile else None, nr=n_procs)
         runner = _Runner(
-            argv=["exec", shlex.quote(str(solver.executable)), "-case", shlex.quote(str(case))],
+            argv=[shlex.quote(str(solver.executable)), "-case", shlex.quote(str(case))],
             silent=True,
             noLog=True,
             writeState=False,
+            lam=lam,
         )
         with contextlib.redirect_stdout(sys.stderr):
             data = runner.start()
@@ -404,6 +581,7 @@ def run_solver(
         wall_seconds=wall,
         cpu_seconds=cpu,
         max_rss_mb=float(rss) if rss else None,
+        n_procs=n_procs,
     )
 
 

@@ -98,6 +98,8 @@ class OpenFOAM:
             env.setdefault("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
         # One thread per rank: MPI and BLAS-threaded numpy must not oversubscribe
         env.setdefault("OMP_NUM_THREADS", "1")
+        # PyFoam's parallel runner picks the mpirun flavour from WM_MPLIB
+        env.setdefault("WM_MPLIB", "SYSTEMOPENMPI")
         return env
 
     def build_env(self, user_appbin: Path, user_libbin: Path) -> dict[str, str]:

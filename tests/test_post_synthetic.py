@@ -51,13 +51,15 @@ def test_grains_through_the_top_count_in_the_mass_balance():
 
 def test_overshooting_start_up_is_left_out_of_the_window():
     # a damped oscillation (50% swing) crosses the plateau band early; the
-    # window must open where the smoothed rate enters the band for good, not
-    # at its first crossing (which keeps the swing in and calls it unsteady)
+    # window must open once the smoothed rate has stopped leaving the 5%
+    # excursion band, not at its first crossing (which keeps the swing in the
+    # window and calls the run unsteady)
     scene, d = synthetic(q_plateau=1e-3, t_end=1.0, tau=0.02, overshoot=0.5)
     st = find_steady(d, scene)
     assert st.steady, st.reason
-    assert st.t_start > 0.2  # the smoothed swing leaves the 2% band for good at 0.23 s
-    assert st.q == pytest.approx(1e-3, rel=1e-3)
+    assert st.t_start > 0.15  # measured 0.181; the first crossing is at 0.05 s
+    # what is left of the swing (< 5%, decaying) biases the mean by < 0.2%
+    assert st.q == pytest.approx(1e-3, rel=2e-3)
 
 
 def test_drifting_rate_is_not_steady():

@@ -1,0 +1,122 @@
+"""Restart bookkeeping, hostfiles and sweep files, without running OpenFOAM."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+import pytest
+
+from foamsilo.errors import SceneError
+from foamsilo.run import (
+    RESTART_FIELDS,
+    _all_local,
+    prune_incomplete_times,
+    time_directories,
+)
+from foamsilo.sweep import load_sweep
+
+FOOTER = "\n// " + "*" * 73 + " //\n"
+
+
+def write_time(root: Path, name: str, whole: bool = True, skip: str | None = None) -> None:
+    """A time directory as siloFoam writes it; ``whole=False`` truncates U (killed write)."""
+    for f in RESTART_FIELDS:
+        if f == skip:
+            continue
+        p = root / name / f
+        p.parent.mkdir(parents=True, exist_ok=True)
+        body = "FoamFile {}\ninternalField uniform 0;\n"
+        p.write_text(body if (f == "U" and not whole) else body + FOOTER)
+
+
+def make_case(tmp_path: Path) -> Path:
+    case = tmp_path / "case"
+    (case / "0").mkdir(parents=True)
+    (case / "0" / "U").write_text("x")
+    (case / "0" / "alpha.granular").write_text("x")
+    return case
+
+
+def test_a_killed_write_is_not_a_restart_point_and_is_removed(tmp_path):
+    case = make_case(tmp_path)
+    write_time(case, "0.1")
+    write_time(case, "0.2")
+    write_time(case, "0.3", whole=False)  # U cut short
+    write_time(case, "0.4", skip="phi")  # phi never written
+    assert time_directories(case) == ["0", "0.1", "0.2"]
+    removed = prune_incomplete_times(case)
+    assert sorted(removed) == ["0.3", "0.4"]
+    assert sorted(p.name for p in case.iterdir()) == ["0", "0.1", "0.2"]
+
+
+def test_a_decomposed_time_counts_only_when_every_rank_has_it(tmp_path):
+    case = make_case(tmp_path)
+    for rank in (0, 1):
+        write_time(case / f"processor{rank}", "0.1")
+    write_time(case / "processor0", "0.2")
+    write_time(case / "processor1", "0.2", whole=False)
+    write_time(case / "processor0", "0.3")  # rank 1 never got there
+    assert time_directories(case) == ["0", "0.1"]
+    prune_incomplete_times(case)
+    for rank in (0, 1):
+        assert sorted(p.name for p in (case / f"processor{rank}").iterdir()) == ["0.1"]
+
+
+def test_hostfiles_naming_only_this_machine_are_local(tmp_path):
+    local = tmp_path / "local"
+    local.write_text(f"localhost\n# comment\n{socket.gethostname()}\n\n")
+    remote = tmp_path / "remote"
+    remote.write_text("localhost\nnode17.cluster slots=16\n")
+    assert _all_local(None)
+    assert _all_local(local)
+    assert not _all_local(remote)
+
+
+SWEEP = """
+base = "zhou-planar"
+output = "{out}"
+{extra}
+[set]
+"mesh.cells_across" = 16
+[grid]
+"silo.orifice_width" = [0.02, 0.025]
+"mesh.top_cell_ratio" = [2.0, 3.0]
+[[cases]]
+"silo.orifice_width" = 0.03
+"""
+
+
+def sweep_file(tmp_path: Path, extra: str = "", grid_value: str | None = None) -> Path:
+    text = SWEEP.format(out=tmp_path / "out", extra=extra)
+    if grid_value is not None:
+        text = text.replace("[0.02, 0.025]", grid_value)
+    p = tmp_path / "sweep.toml"
+    p.write_text(text)
+    return p
+
+
+def test_sweep_grid_and_list_make_every_case(tmp_path):
+    sw = load_sweep(sweep_file(tmp_path, "cpu_budget = 4\nranks_per_case = 2"))
+    assert len(sw.cases) == 2 * 2 + 1
+    assert sw.cases_at_once == 2  # 2 cases x 2 ranks <= 4 cores
+    assert sw.cases[-1].overrides == {"mesh.cells_across": 16, "silo.orifice_width": 0.03}
+    assert len({c.directory for c in sw.cases}) == len(sw.cases)
+    assert all(c.directory.parent == tmp_path / "out" for c in sw.cases)
+
+
+@pytest.mark.parametrize(
+    ("extra", "grid_value", "field"),
+    [
+        ("cpu_budget = 1\nranks_per_case = 2", None, "sweep.cpu_budget"),
+        ("ranks_per_case = 0", None, "sweep.ranks_per_case"),
+        ("colour = 'red'", None, "sweep.colour"),
+        ("", "[]", "sweep.grid.silo.orifice_width"),
+        ("", "[0.02, 0.2]", "cases[2].silo.orifice_width"),  # wider than the silo
+    ],
+)
+def test_bad_sweep_is_refused_before_anything_runs(tmp_path, extra, grid_value, field):
+    with pytest.raises(SceneError) as err:
+        load_sweep(sweep_file(tmp_path, extra, grid_value))
+    assert err.value.field == field
+    assert not (tmp_path / "out").exists()
