@@ -540,30 +540,22 @@ def cmd_bench(args: argparse.Namespace) -> int:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
         return 0
-    if args.suite == "mesh":
-        from foamsilo.bench import bench_mesh, mesh_report
+    if args.suite in ("mesh", "mpi"):
+        from foamsilo.bench import bench_mesh, bench_mpi, mesh_report, mpi_report
 
-        targets = [int(c) for c in args.cells] if args.cells != ["32", "64"] else [64800, 1000000]
+        default = args.cells == ["32", "64"]
         with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-            res = bench_mesh(targets, Path(args.work_dir) if args.work_dir else Path(tmp))
-        text = mesh_report(res)
+            work = Path(args.work_dir) if args.work_dir else Path(tmp)
+            if args.suite == "mesh":
+                targets = [64800, 1000000] if default else [int(c) for c in args.cells]
+                res = bench_mesh(targets, work)
+            else:
+                end = args.end_time if args.end_time != 1.0 else 0.02
+                target = 65000 if default else int(args.cells[0])
+                res = bench_mpi([int(r) for r in args.ranks], target, end, work)
+        text = (mesh_report if args.suite == "mesh" else mpi_report)(res)
         if args.log:
-            write_result(res, Path(args.log).with_name("mesh.jsonl"))
-        if args.output:
-            Path(args.output).write_text(text + "\n")
-        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
-        return 0
-    if args.suite == "mpi":
-        from foamsilo.bench import bench_mpi, mpi_report
-
-        ranks = [int(r) for r in args.ranks]
-        target = int(args.cells[0]) if args.cells != ["32", "64"] else 65000
-        end = args.end_time if args.end_time != 1.0 else 0.02
-        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-            res = bench_mpi(ranks, target, end, Path(args.work_dir) if args.work_dir else Path(tmp))
-        text = mpi_report(res)
-        if args.log:
-            write_result(res, Path(args.log).with_name("mpi.jsonl"))
+            write_result(res, Path(args.log).with_name(f"{args.suite}.jsonl"))
         if args.output:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))

@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -68,15 +69,15 @@ def test_two_ranks_through_a_hostfile_match_the_serial_rate(tmp_path, serial_16)
     assert s["mass_balance_rel_error"] < 1e-8
 
 
-def _kill_when(case: Path, args: list[str], time_dir: str) -> None:
-    """Start `foamsilo run` and kill -9 its whole process group once ``time_dir`` appears."""
+def _kill_when(args: list[str], ready: Callable[[], bool]) -> None:
+    """Start ``foamsilo ARGS`` and kill -9 its whole process group once ``ready()``."""
     exe = [sys.executable, "-m", "foamsilo.cli", *args]
     p = subprocess.Popen(exe, start_new_session=True, stdout=subprocess.DEVNULL,
                          stderr=subprocess.DEVNULL)  # fmt: skip
     deadline = time.monotonic() + 300
     try:
         while p.poll() is None and time.monotonic() < deadline:
-            if (case / time_dir).exists():
+            if ready():
                 os.killpg(p.pid, signal.SIGKILL)
                 break
             time.sleep(0.002)
@@ -95,7 +96,7 @@ def test_killed_run_resumes_to_the_uninterrupted_rate(tmp_path, solver):
 
     case = tmp_path / "killed"
     args = ["run", "zhou-planar", "-o", str(case), "--quiet", *sets(scene)]
-    _kill_when(case, args, "0.2")
+    _kill_when(args, lambda: (case / "0.2").exists())
     # an interrupted case is not silently continued ...
     code, err = cli("run", str(case), "--quiet")
     assert code != 0 and "--resume" in err["error"]["message"]
@@ -148,25 +149,15 @@ def test_interrupted_sweep_resumes_without_rerunning_finished_cases(tmp_path, so
     out = tmp_path / "out"
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(SWEEP.format(out=out))
+
     # kill -9 the whole sweep (driver and solvers) once a case is done and
-    # another one is half-way (it has written t = 0.15)
-    exe = [sys.executable, "-m", "foamsilo.cli", "sweep", str(sweep), "--quiet", "--json"]
-    p = subprocess.Popen(exe, start_new_session=True, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL)  # fmt: skip
-    deadline = time.monotonic() + 300
-    try:
-        while p.poll() is None and time.monotonic() < deadline:
-            finished = {s.parent for s in out.glob("*/summary.json")}
-            halfway = {d.parent for d in out.glob("*/0.15") if not (d.parent / "0.5").exists()}
-            if finished and halfway - finished:
-                os.killpg(p.pid, signal.SIGKILL)
-                break
-            time.sleep(0.002)
-    finally:
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGKILL)
-        p.wait()
-    assert p.returncode == -signal.SIGKILL, "the sweep ended before it could be killed"
+    # another one is half-way (it has written t = 0.15, not yet 0.5)
+    def ready() -> bool:
+        finished = {s.parent for s in out.glob("*/summary.json")}
+        halfway = {d.parent for d in out.glob("*/0.15") if not (d.parent / "0.5").exists()}
+        return bool(finished and halfway - finished)
+
+    _kill_when(["sweep", str(sweep), "--quiet", "--json"], ready)
     done = {s.parent.name: s.stat().st_mtime_ns for s in out.glob("*/summary.json")}
     assert done
     table = json.loads((out / "summary.json").read_text())  # written whole, readable
