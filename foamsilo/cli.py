@@ -25,6 +25,7 @@ from foamsilo.errors import (
     FoamError,
     FoamsiloError,
     MeshError,
+    RunInterruptedError,
     SceneError,
     ToolchainError,
 )
@@ -71,6 +72,8 @@ def _error_payload(exc: BaseException) -> dict[str, Any]:
             last_good_time=exc.last_good_time,
             case_dir=str(exc.case_dir),
         )
+    if isinstance(exc, RunInterruptedError):
+        err.update(time=exc.time, last_good_time=exc.last_good_time, case_dir=str(exc.case_dir))
     if isinstance(exc, MeshError) and exc.geometry_file:
         err["geometry_file"] = str(exc.geometry_file)
     return {"ok": False, "error": err}
@@ -822,7 +825,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write("interrupted\n")
         return 130
     except FoamsiloError as exc:
-        code = 2 if isinstance(exc, SceneError) else 1
+        code = (
+            2 if isinstance(exc, SceneError) else 130 if isinstance(exc, RunInterruptedError) else 1
+        )
         if getattr(args, "json", False):
             sys.stdout.write(
                 json.dumps(_error_payload(exc), indent=2, default=_json_default) + "\n"

@@ -139,3 +139,27 @@ class RunTimeLimitError(FoamsiloError):
             f"stopped at the wall-time limit of {limit:g} s: reached t = {reached} s of "
             f"{end_time:g} s; case kept in {case_dir}"
         )
+
+
+class RunInterruptedError(FoamsiloError):
+    """A run was interrupted (Ctrl-C, SIGINT); the case is kept for ``--resume``.
+
+    Parameters
+    ----------
+    time
+        Simulated time reached [s], or None.
+    last_good_time
+        Latest complete time directory, or None.
+    case_dir
+        The case.
+    """
+
+    def __init__(self, time: float | None, last_good_time: str | None, case_dir: Path) -> None:
+        self.time = time
+        self.last_good_time = last_good_time
+        self.case_dir = case_dir
+        reached = f"{time:.6g}" if time is not None else "0"
+        super().__init__(
+            f"interrupted at t = {reached} s; latest complete time directory: "
+            f"{last_good_time}; `foamsilo run {case_dir} --resume` goes on from there"
+        )

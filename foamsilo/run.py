@@ -24,14 +24,22 @@ import re
 import resource
 import shlex
 import shutil
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from foamsilo.errors import DivergenceError, FoamError, FoamsiloError, RunTimeLimitError
+from foamsilo.errors import (
+    DivergenceError,
+    FoamError,
+    FoamsiloError,
+    RunInterruptedError,
+    RunTimeLimitError,
+)
 from foamsilo.solver import SolverBuild
 from foamsilo.toolchain import OpenFOAM
 
@@ -535,6 +543,8 @@ def run_solver(
         os.environ.setdefault("OMPI_MCA_plm_rsh_agent", shutil.which("false") or "/bin/false")
     usage0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
+    interrupted: list[float] = []
+    old_handler = None
     try:
         # 'exec' makes the solver the process PyFoam signals (not a shell);
         # PyFoam's own messages go to stderr so that --json stdout stays clean
@@ -550,10 +560,24 @@ def run_solver(
             writeState=False,
             lam=lam,
         )
+
+        # Ctrl-C: the solver (same process group) stops by itself; a SIGINT
+        # sent to this process alone is passed on. Either way Python only
+        # notes it, so that the run ends as an interruption the case can be
+        # resumed from, not as a KeyboardInterrupt in the middle of PyFoam.
+        def _on_sigint(signum: int, frame: Any) -> None:
+            interrupted.append(time.time())
+            with contextlib.suppress(OSError):
+                os.kill(runner.run.threadPid, signal.SIGINT)
+
+        if threading.current_thread() is threading.main_thread():
+            old_handler = signal.signal(signal.SIGINT, _on_sigint)
         with contextlib.redirect_stdout(sys.stderr):
             data = runner.start()
             runner.run.join()  # the solver process is reaped: its rusage is final
     finally:
+        if old_handler is not None:
+            signal.signal(signal.SIGINT, old_handler)
         os.environ.clear()
         os.environ.update(saved)
         log.close()
@@ -563,6 +587,10 @@ def run_solver(
     monitor.write_table(case / STEP_TABLE)
     rss = data.get("usedMemory")
 
+    interrupted_run = interrupted or data.get("keyboardInterrupt")
+    if interrupted_run and monitor.divergence is None and not timed_out:
+        good = time_directories(case)
+        raise RunInterruptedError(monitor.current_time, good[-1] if good else None, case)
     if timed_out and monitor.divergence is None:
         raise RunTimeLimitError(float(max_wall_seconds or 0), timed_out[0], end_time, case)
     if monitor.divergence is not None:

@@ -69,23 +69,30 @@ def test_two_ranks_through_a_hostfile_match_the_serial_rate(tmp_path, serial_16)
     assert s["mass_balance_rel_error"] < 1e-8
 
 
-def _kill_when(args: list[str], ready: Callable[[], bool]) -> None:
-    """Start ``foamsilo ARGS`` and kill -9 its whole process group once ``ready()``."""
+def _kill_when(
+    args: list[str], ready: Callable[[], bool], sig: signal.Signals = signal.SIGKILL
+) -> str:
+    """Start ``foamsilo ARGS``, signal its whole process group once ``ready()``.
+
+    Returns what it wrote on stdout.
+    """
     exe = [sys.executable, "-m", "foamsilo.cli", *args]
-    p = subprocess.Popen(exe, start_new_session=True, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL)  # fmt: skip
+    p = subprocess.Popen(exe, start_new_session=True, stdout=subprocess.PIPE,
+                         stderr=subprocess.DEVNULL, text=True)  # fmt: skip
     deadline = time.monotonic() + 300
     try:
         while p.poll() is None and time.monotonic() < deadline:
             if ready():
-                os.killpg(p.pid, signal.SIGKILL)
+                os.killpg(p.pid, sig)
                 break
             time.sleep(0.002)
     finally:
-        if p.poll() is None:
+        if p.poll() is None and time.monotonic() >= deadline:
             os.killpg(p.pid, signal.SIGKILL)
-        p.wait()
-    assert p.returncode == -signal.SIGKILL, "the run ended before it could be killed"
+        out, _ = p.communicate(timeout=120)
+    expected = -signal.SIGKILL if sig == signal.SIGKILL else 130
+    assert p.returncode == expected, f"exit {p.returncode}: {out}"
+    return out
 
 
 def test_killed_run_resumes_to_the_uninterrupted_rate(tmp_path, solver):
@@ -109,6 +116,21 @@ def test_killed_run_resumes_to_the_uninterrupted_rate(tmp_path, solver):
     assert s["steady"]
     assert s["Q"] == pytest.approx(whole["Q"], rel=0.01)
     assert s["mass_balance_rel_error"] < 1e-8
+
+
+def test_ctrl_c_stops_the_run_as_an_interruption_to_resume(tmp_path, solver):
+    case = tmp_path / "ctrlc"
+    scene = ["mesh.cells_across=24", "run.end_time=0.5", "run.write_interval=0.05"]
+    args = ["run", "zhou-planar", "-o", str(case), "--quiet", "--json", *sets(scene)]
+    # SIGINT to the process group, as the terminal sends it on Ctrl-C
+    out = _kill_when(args, lambda: (case / "0.2").exists(), signal.SIGINT)
+    err = json.loads(out)["error"]
+    assert err["type"] == "RunInterruptedError"
+    assert float(err["last_good_time"]) >= 0.2
+    assert "--resume" in err["message"]
+    code, s = cli("run", str(case), "--quiet", "--resume")
+    assert code == 0, s
+    assert s["run"]["start_time"] == pytest.approx(float(err["last_good_time"]))
 
 
 def test_unstable_scene_is_stopped_with_the_divergence_error(tmp_path, solver):
