@@ -74,7 +74,10 @@ def read_function_object(case: Path, name: str) -> tuple[list[str], np.ndarray]:
         files = sorted(start.glob("*.dat"), key=lambda f: f.stat().st_mtime)
         if not files:
             continue
-        lines = files[-1].read_text().splitlines()
+        text = files[-1].read_text()
+        lines = text.splitlines()
+        if lines and not text.endswith("\n"):
+            lines = lines[:-1]  # a run killed mid-line: the last row is cut short
         header = [ln for ln in lines if ln.startswith("#")]
         cols = header[-1].lstrip("#").split("\t") if header else []
         cols = [c.strip() for c in cols if c.strip()]
@@ -474,6 +477,12 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
             }
     if scene.gas_coupled and st.steady:
         summary["pore_pressure"] = _pore_pressure_summary(case, scene, d, st)
+    try:
+        from foamsilo.fields import field_summary
+
+        summary["fields"] = field_summary(case)
+    except Exception as exc:  # noqa: BLE001 -- field reduction must not lose the rates
+        summary["fields"] = {"error": str(exc)}
     if run_info:
         summary["run"] = run_info
     write_discharge_csv(d, scene, case / DISCHARGE_CSV)

@@ -309,7 +309,12 @@ def _time_dirs(root: Path) -> list[Path]:
 def _complete(tdir: Path) -> bool:
     if float(tdir.name) == 0.0:
         return (tdir / "U").exists() and (tdir / "alpha.granular").exists()
-    return all(_written_whole(tdir / f) for f in RESTART_FIELDS)
+    # the restart fields, and every other file written whole: the solver
+    # also reads some of the others (alphaPhi0 is READ_IF_PRESENT), and a
+    # truncated one stops the restart with a fatal IO error
+    if not all((tdir / f).is_file() for f in RESTART_FIELDS):
+        return False
+    return all(_written_whole(p) for p in tdir.rglob("*") if p.is_file())
 
 
 def processor_dirs(case: Path) -> list[Path]:

@@ -89,3 +89,14 @@ def test_function_object_files_are_merged_over_restarts(tmp_path):
     assert cols[0] == "Time"
     assert data[:, 0].tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
     assert data[2:, 1].tolist() == [3.0, 4.0, 5.0]  # the restart's rows win
+
+
+def test_a_row_cut_short_by_a_kill_is_dropped(tmp_path):
+    root = tmp_path / "postProcessing" / "orificeFlow" / "0"
+    root.mkdir(parents=True)
+    hdr = "# Time\tsum(alphaPhi0.granular)\tsum(phi)\n"
+    # kill -9 while OpenFOAM wrote the third row: "0.3 3.25e" with no newline
+    (root / "surfaceFieldValue.dat").write_text(hdr + "0.1\t1.5\t1\n0.2\t2.5\t2\n0.3\t3.25e")
+    _, data = read_function_object(tmp_path, "orificeFlow")
+    assert data[:, 0].tolist() == [0.1, 0.2]
+    assert data[:, 1].tolist() == [1.5, 2.5]

@@ -44,9 +44,11 @@ def test_a_killed_write_is_not_a_restart_point_and_is_removed(tmp_path):
     write_time(case, "0.2")
     write_time(case, "0.3", whole=False)  # U cut short
     write_time(case, "0.4", skip="phi")  # phi never written
+    write_time(case, "0.5")
+    (case / "0.5" / "alphaPhi0.granular").write_text("FoamFile {}\n")  # cut: read on restart
     assert time_directories(case) == ["0", "0.1", "0.2"]
     removed = prune_incomplete_times(case)
-    assert sorted(removed) == ["0.3", "0.4"]
+    assert sorted(removed) == ["0.3", "0.4", "0.5"]
     assert sorted(p.name for p in case.iterdir()) == ["0", "0.1", "0.2"]
 
 

@@ -126,7 +126,7 @@ def test_ctrl_c_stops_the_run_as_an_interruption_to_resume(tmp_path, solver):
     out = _kill_when(args, lambda: (case / "0.2").exists(), signal.SIGINT)
     err = json.loads(out)["error"]
     assert err["type"] == "RunInterruptedError"
-    assert float(err["last_good_time"]) >= 0.2
+    assert float(err["last_good_time"]) >= 0.15  # 0.2 may be the one being written
     assert "--resume" in err["message"]
     code, s = cli("run", str(case), "--quiet", "--resume")
     assert code == 0, s
@@ -186,7 +186,7 @@ def test_interrupted_sweep_resumes_without_rerunning_finished_cases(tmp_path, so
     assert len(table["cases"]) == 3
 
     code, s = cli("sweep", str(sweep), "--quiet")
-    assert code == 0, s
+    assert code == 0, [(r["status"], r.get("error")) for r in s["cases"]]
     rows = s["cases"]
     assert [r["status"] for r in rows] == ["ok", "ok", "ok"]
     # finished cases were post-processed again, not re-run (their summary

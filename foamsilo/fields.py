@@ -1,0 +1,334 @@
+"""Field output of a case, read with pyvista's OpenFOAM reader.
+
+:class:`CaseFields` opens a case (serial, or decomposed when only the
+processor directories hold results) and reduces its written time directories
+to what users look at besides Q(t): where the free surface is, the velocity
+across the silo at a given height (Venier et al. Fig. 3: y = 0.15 H), which
+part of the grains is stagnant (viscosity at the cap), and mid-plane pictures
+of granular pressure, volume fraction, speed and log10 viscosity (Venier
+Fig. 6), rendered off-screen.
+
+Geometry conventions: y is up, the silo floor is y = 0. Planar silos span
+0 <= x <= L (mid-depth z = depth/2); cylinders and hoppers have their axis on
+x = z = 0 (the wedge lies around the z = 0 plane); rectangular 3D boxes span
+0 <= x <= L.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from foamsilo.case import SCENE_FILE
+from foamsilo.errors import FoamsiloError
+from foamsilo.scene import Scene, load_scene_file
+
+#: Cells whose granular viscosity is within this fraction of the cap are stagnant
+CAP_FRACTION = 0.99
+#: Volume fraction that marks the free surface
+SURFACE_ALPHA = 0.5
+ALPHA = "alpha.granular"
+PICTURE_FIELDS = ("p", ALPHA, "U", "nu1")
+
+
+class CaseFields:
+    """Written fields of a foamsilo case.
+
+    Parameters
+    ----------
+    case
+        A case directory written by ``foamsilo new`` / ``foamsilo run``.
+
+    Raises
+    ------
+    FoamsiloError
+        The directory is not a case, or holds no written time.
+    """
+
+    def __init__(self, case: Path) -> None:
+        import pyvista as pv
+
+        self.case = Path(case).resolve()
+        foam = self.case / "case.foam"
+        if not foam.exists() or not (self.case / SCENE_FILE).exists():
+            raise FoamsiloError(f"{self.case} is not a foamsilo case (no case.foam/scene.toml)")
+        self.scene: Scene = load_scene_file(self.case / SCENE_FILE)
+        self._reader = pv.POpenFOAMReader(str(foam))
+        serial = [t for t in self._reader.time_values if t > 0]
+        if not serial and (self.case / "processor0").is_dir():
+            self._reader.case_type = "decomposed"
+        self._reader.cell_to_point_creation = False
+        self._reader.disable_all_patch_arrays()
+        self._reader.enable_patch_array("internalMesh")
+        self._cache: dict[float, Any] = {}
+
+    # --------------------------------------------------------------- properties
+    @property
+    def decomposed(self) -> bool:
+        """Whether the fields are read from the processor directories."""
+        return self._reader.case_type == "decomposed"
+
+    @property
+    def times(self) -> list[float]:
+        """Written times [s], 0 included."""
+        return [float(t) for t in self._reader.time_values]
+
+    @property
+    def field_names(self) -> list[str]:
+        """Cell fields the case writes."""
+        return sorted(self._reader.cell_array_names)
+
+    @cached_property
+    def nu_cap(self) -> float:
+        """Kinematic viscosity at the cap, eta_max / rho [m^2/s]."""
+        return self.scene.eta_max / self.scene.material.density
+
+    # ------------------------------------------------------------------ reading
+    def _check_time(self, time: float) -> float:
+        for t in self.times:
+            if math.isclose(t, time, rel_tol=1e-9, abs_tol=1e-12):
+                return t
+        valid = ", ".join(f"{t:g}" for t in self.times)
+        raise FoamsiloError(f"time {time:g} s is not written in {self.case}; valid: {valid}")
+
+    def mesh(self, time: float) -> Any:
+        """Return the internal mesh at ``time`` with its cell fields (a pyvista grid)."""
+        t = self._check_time(time)
+        if t not in self._cache:
+            self._reader.set_active_time_value(t)
+            data = self._reader.read()
+            grid = data["internalMesh"]
+            grid = grid.compute_cell_sizes(length=False, area=False, volume=True)
+            self._cache = {t: grid}  # one time at a time: 3D meshes are large
+        return self._cache[t]
+
+    def _field(self, grid: Any, name: str) -> np.ndarray:
+        if name not in grid.cell_data:
+            valid = ", ".join(sorted(grid.cell_data.keys()))
+            raise FoamsiloError(f"field {name!r} not written in {self.case}; valid: {valid}")
+        return np.asarray(grid.cell_data[name])
+
+    # ---------------------------------------------------------------- reductions
+    def granular_volume(self, time: float) -> float:
+        """Volume of grains in the silo [m^3] (per unit depth in a planar scene: [m^2])."""
+        g = self.mesh(time)
+        v = float(np.sum(self._field(g, ALPHA) * g.cell_data["Volume"]))
+        return v / self.scene.mesh_fraction
+
+    def _horizontal(self, grid: Any) -> np.ndarray:
+        """Horizontal coordinate of cell centres: x (planar, box) or radius."""
+        c = grid.cell_centers().points
+        if self.scene.representation == "planar" or self.scene.silo.shape == "rectangular":
+            return c[:, 0]
+        return np.hypot(c[:, 0], c[:, 2])
+
+    def free_surface(self, time: float, bins: int = 8) -> dict[str, float]:
+        """Heights of the free surface [m]: on the axis, at the wall, and the mean.
+
+        The cross-section is cut into ``bins`` bands of x (planar, boxes) or r;
+        a band spans the domain's height H, so its grains stand
+        ``H sum(alpha V) / sum(V)`` high: the VOF column height, which places
+        the surface within a cell. The first band holds the axis (the crater
+        above the orifice), the last the wall. (In a hopper the bands are not
+        prisms and the heights are approximate; the mean is exact.)
+        """
+        g = self.mesh(time)
+        alpha = self._field(g, ALPHA)
+        vol = np.asarray(g.cell_data["Volume"])
+        h = self._horizontal(g)
+        height = self.scene.silo.height
+        lo, hi = float(h.min()), float(h.max())
+        if self.scene.representation == "planar" or self.scene.silo.shape == "rectangular":
+            # the orifice is in the middle: fold x onto the distance from it
+            axis = self.scene.silo.width / 2
+            h = np.abs(h - axis)
+            lo, hi = 0.0, float(h.max())
+        edges = np.linspace(lo, hi, bins + 1)
+        band_of = np.clip(np.searchsorted(edges, h, side="right") - 1, 0, bins - 1)
+        num = np.bincount(band_of, weights=alpha * vol, minlength=bins)
+        den = np.bincount(band_of, weights=vol, minlength=bins)
+        heights = np.where(den > 0, height * num / np.where(den > 0, den, 1), np.nan)
+        return {
+            "axis_m": float(heights[0]),
+            "wall_m": float(heights[-1]),
+            "mean_m": self.granular_volume(time) / self.scene.cross_section_area,
+        }
+
+    def velocity_profile(self, time: float, height: float, n: int = 200) -> dict[str, np.ndarray]:
+        """Velocity across the silo on a horizontal line at ``height`` [m].
+
+        Returns the positions (x, or r from the axis), the horizontal and
+        vertical velocity [m/s] and the volume fraction along the line.
+        """
+        s = self.scene
+        if not 0.0 < height < s.silo.height:
+            raise FoamsiloError(
+                f"height {height:g} m: must be inside the silo (0, {s.silo.height:g}) m"
+            )
+        g = self.mesh(time)
+        rep = s.representation
+        eps = 1e-6 * s.silo.width
+        if rep == "planar":
+            z = float(g.bounds[4] + g.bounds[5]) / 2
+            a, b = (eps, height, z), (s.silo.width - eps, height, z)
+        elif s.silo.shape == "rectangular":
+            z = float(g.bounds[4] + g.bounds[5]) / 2
+            a, b = (eps, height, z), (s.silo.width - eps, height, z)
+        else:
+            r = s.silo.wall_radius(height)
+            a, b = (eps, height, 0.0), (r - eps, height, 0.0)
+        line = g.sample_over_line(a, b, resolution=n - 1)
+        # points outside every cell (a wedge's planar outer face lies inside r = R)
+        inside = np.asarray(line.point_data["vtkValidPointMask"]).astype(bool)
+        pts = np.asarray(line.points)[inside]
+        pos = pts[:, 0] if rep != "axisymmetric" else np.hypot(pts[:, 0], pts[:, 2])
+        u = np.asarray(line.point_data["U"])[inside]
+        alpha = np.asarray(line.point_data[ALPHA])[inside]
+        return {
+            "position_m": pos,
+            "u_horizontal": u[:, 0],
+            "u_vertical": u[:, 1],
+            "alpha": alpha,
+        }
+
+    def stagnant_fraction(self, time: float) -> float:
+        """Fraction of the granular volume whose viscosity sits at the cap."""
+        g = self.mesh(time)
+        alpha = self._field(g, ALPHA)
+        nu = self._field(g, "nu1")
+        w = alpha * g.cell_data["Volume"]
+        total = float(np.sum(w))
+        if total <= 0:
+            return math.nan
+        return float(np.sum(w[nu >= CAP_FRACTION * self.nu_cap]) / total)
+
+    # ----------------------------------------------------------------- pictures
+    def picture(self, time: float, path: Path) -> Path:
+        """Mid-plane images of p, alpha, |U| and log10 eta side by side (PNG).
+
+        The plane is cut with pyvista (the mesh itself for a planar scene, the
+        z = 0 section through the axis otherwise) and drawn cell by cell with
+        matplotlib's Agg backend: off-screen, no display or GL needed.
+        """
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.collections import PolyCollection
+
+        g = self.mesh(time)
+        s = self.scene
+        if s.representation == "planar":
+            z0 = float(g.bounds[4] + g.bounds[5]) / 2
+        else:
+            z0 = 0.0
+        plane = g.slice(normal="z", origin=(0.0, 0.0, z0))
+        if plane.n_cells == 0:
+            raise FoamsiloError(f"{self.case}: the mid-plane z = {z0:g} m cuts no cell")
+        polys = [np.asarray(plane.get_cell(i).points)[:, :2] for i in range(plane.n_cells)]
+        rho = s.material.density
+        panels = [
+            ("granular pressure p [Pa]", np.asarray(plane.cell_data["p"]), "viridis"),
+            ("volume fraction alpha", np.asarray(plane.cell_data[ALPHA]), "cividis"),
+            ("grain speed |U| [m/s]", np.linalg.norm(plane.cell_data["U"], axis=1), "magma"),
+            (
+                "log10 grain viscosity [Pa s]",
+                np.log10(np.maximum(np.asarray(plane.cell_data["nu1"]) * rho, 1e-12)),
+                "plasma",
+            ),
+        ]
+        x0, x1, y0, y1 = plane.bounds[0], plane.bounds[1], plane.bounds[2], plane.bounds[3]
+        aspect = (y1 - y0) / max(x1 - x0, 1e-12)
+        fig_h = 6.0
+        panel_w = max(fig_h / aspect, 1.2) + 0.9
+        fig, axes = plt.subplots(1, 4, figsize=(4 * panel_w, fig_h + 0.6), constrained_layout=True)
+        # speed and viscosity of the grains only: the air above them carries
+        # spurious fast velocities that would set the colour scale
+        air = np.asarray(plane.cell_data[ALPHA]) < SURFACE_ALPHA
+        for k in (2, 3):
+            panels[k] = (panels[k][0], np.where(air, np.nan, panels[k][1]), panels[k][2])
+        for ax, (title, values, cmap_name) in zip(axes, panels, strict=True):
+            cmap = matplotlib.colormaps[cmap_name].copy()
+            cmap.set_bad("0.85")
+            coll = PolyCollection(
+                polys, array=np.ma.masked_invalid(values), cmap=cmap, edgecolors="none"
+            )
+            ax.add_collection(coll)
+            ax.set_xlim(x0, x1)
+            ax.set_ylim(y0, y1)
+            ax.set_aspect("equal")
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("r [m]" if s.representation != "planar" else "x [m]", fontsize=8)
+            ax.tick_params(labelsize=7)
+            fig.colorbar(coll, ax=ax, shrink=0.8)
+        axes[0].set_ylabel("y [m]", fontsize=8)
+        fig.suptitle(f"{s.name}, t = {time:g} s ({s.representation})", fontsize=10)
+        path = Path(path)
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
+
+
+#: Height of the velocity profile, as a fraction of the silo height (Venier Fig. 3)
+PROFILE_HEIGHT = 0.15
+PROFILE_CSV = "profile_U.csv"
+SURFACE_CSV = "free_surface.csv"
+FIELDS_PNG = "fields.png"
+
+
+def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
+    import csv
+    import os
+
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        for r in rows:
+            w.writerow([f"{x:.9g}" for x in r])
+    os.replace(tmp, path)
+
+
+def field_summary(case: Path) -> dict[str, Any]:
+    """Reduce the written fields of a case; write the profile, surface and picture files.
+
+    At the latest written time: the free surface (axis, wall, mean), the
+    stagnant fraction, the velocity profile at 0.15 H (``profile_U.csv``) and
+    the mid-plane picture (``fields.png``); over every written time, the free
+    surface (``free_surface.csv``).
+    """
+    f = CaseFields(case)
+    later = [t for t in f.times if t > 0]
+    if not later:
+        raise FoamsiloError(f"{f.case}: no time written after 0")
+    t = later[-1]
+    height = PROFILE_HEIGHT * f.scene.silo.height
+    prof = f.velocity_profile(t, height)
+    _write_csv(
+        f.case / PROFILE_CSV,
+        ["position_m", "u_horizontal_m_s", "u_vertical_m_s", "alpha"],
+        np.column_stack(
+            [prof["position_m"], prof["u_horizontal"], prof["u_vertical"], prof["alpha"]]
+        ).tolist(),
+    )
+    series = []
+    for tt in later:
+        s = f.free_surface(tt)
+        series.append([tt, s["axis_m"], s["wall_m"], s["mean_m"]])
+    _write_csv(f.case / SURFACE_CSV, ["t_s", "axis_m", "wall_m", "mean_m"], series)
+    f.picture(t, f.case / FIELDS_PNG)
+    grains = prof["alpha"] >= SURFACE_ALPHA
+    return {
+        "time_s": t,
+        "free_surface_m": f.free_surface(t),
+        "stagnant_fraction": f.stagnant_fraction(t),
+        "profile_height_m": height,
+        "profile_max_downward_m_s": float(-np.min(prof["u_vertical"][grains]))
+        if grains.any()
+        else None,
+        "files": [PROFILE_CSV, SURFACE_CSV, FIELDS_PNG],
+    }
