@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import os
 import shutil
 import tempfile
 import time
@@ -201,6 +202,13 @@ class Case:
             "files": self.files,
             "mesh": self.mesh.as_dict() if self.mesh else None,
         }
+
+
+def write_whole(path: Path, text: str) -> None:
+    """Write a file whole or not at all (a temporary file, then a rename)."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
 
 
 def scene_digest(scene: Scene) -> str:

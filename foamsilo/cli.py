@@ -11,7 +11,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import tempfile
 import time
@@ -160,13 +159,6 @@ def _run_started(case: Path) -> str | None:
 
     later = [t for t in time_directories(case) if float(t) > 0]
     return later[-1] if later else None
-
-
-def _write_whole(path: Path, text: str) -> None:
-    """Write a file whole or not at all (a temporary file, then a rename)."""
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 # ----------------------------------------------------------------------------- commands
@@ -408,7 +400,7 @@ def _print_summary(summary: dict[str, Any], run: dict[str, Any] | None) -> None:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Create (if needed), run and post-process a case."""
-    from foamsilo.case import SCENE_FILE, create_case, read_metadata, scene_digest
+    from foamsilo.case import SCENE_FILE, create_case, read_metadata, scene_digest, write_whole
     from foamsilo.post import summarize
     from foamsilo.run import reconstruct, run_solver
     from foamsilo.scene import load_scene_file
@@ -473,7 +465,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             say("reconstructing the processor directories")
             reconstruct(case_dir, of)
         run_info = result.as_dict()
-        _write_whole(case_dir / "run.json", json.dumps(run_info, indent=2))
+        write_whole(case_dir / "run.json", json.dumps(run_info, indent=2))
     if run_info is None and (case_dir / "run.json").exists():
         run_info = json.loads((case_dir / "run.json").read_text())
     summary = summarize(case_dir, run_info)

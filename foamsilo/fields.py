@@ -32,7 +32,6 @@ CAP_FRACTION = 0.99
 #: Volume fraction that marks the free surface
 SURFACE_ALPHA = 0.5
 ALPHA = "alpha.granular"
-PICTURE_FIELDS = ("p", ALPHA, "U", "nu1")
 
 
 class CaseFields:

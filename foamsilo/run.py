@@ -317,6 +317,16 @@ def _complete(tdir: Path) -> bool:
     return all(_written_whole(p) for p in tdir.rglob("*") if p.is_file())
 
 
+def _complete_names(root: Path) -> set[str]:
+    return {p.name for p in _time_dirs(root) if _complete(p)}
+
+
+def _complete_on_every_rank(case: Path) -> set[str]:
+    """Return the times complete in every processor directory (none: not decomposed)."""
+    procs = processor_dirs(case)
+    return set.intersection(*[_complete_names(pd) for pd in procs]) if procs else set()
+
+
 def processor_dirs(case: Path) -> list[Path]:
     """Return the ``processorN`` directories of a decomposed case, in rank order."""
     procs = [p for p in Path(case).glob("processor*") if p.name[9:].isdigit()]
@@ -330,11 +340,7 @@ def time_directories(case: Path) -> list[str]:
     and written whole. In a decomposed case a time counts when every
     processor holds it complete, or when it was reconstructed.
     """
-    names = {p.name for p in _time_dirs(case) if _complete(p)}
-    procs = processor_dirs(case)
-    if procs:
-        per_rank = [{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs]
-        names |= set.intersection(*per_rank)
+    names = _complete_names(case) | _complete_on_every_rank(case)
     return sorted(names, key=float)
 
 
@@ -346,12 +352,7 @@ def prune_incomplete_times(case: Path) -> list[str]:
     not be left for it.
     """
     procs = processor_dirs(case)
-    keep_root = {p.name for p in _time_dirs(case) if _complete(p)}
-    keep_procs = (
-        set.intersection(*[{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs])
-        if procs
-        else set()
-    )
+    keep_root, keep_procs = _complete_names(case), _complete_on_every_rank(case)
     removed = []
     for root, keep in [(Path(case), keep_root), *[(pd, keep_procs) for pd in procs]]:
         for p in _time_dirs(root):
@@ -371,16 +372,11 @@ ProgressCallback = Callable[[LogMonitor, float], None]
 
 
 def _latest_root_time(case: Path) -> float:
-    names = [p.name for p in _time_dirs(case) if _complete(p)]
-    return max((float(n) for n in names), default=0.0)
+    return max((float(n) for n in _complete_names(case)), default=0.0)
 
 
 def _latest_processor_time(case: Path) -> float:
-    procs = processor_dirs(case)
-    if not procs:
-        return -1.0
-    common = set.intersection(*[{p.name for p in _time_dirs(pd) if _complete(p)} for pd in procs])
-    return max((float(n) for n in common), default=-1.0)
+    return max((float(n) for n in _complete_on_every_rank(case)), default=-1.0)
 
 
 def _all_local(hostfile: Path | None) -> bool:

@@ -44,6 +44,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
+from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError, SceneError
 from foamsilo.scene import load_scene
 
@@ -200,17 +201,11 @@ def _row(case: SweepCase, payload: dict[str, Any] | None) -> dict[str, Any]:
     return row
 
 
-def _write_whole(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
-
-
 def write_summary(sweep: Sweep, rows: list[dict[str, Any]]) -> None:
     """``summary.json`` and ``summary.csv`` of the sweep, each written whole."""
     sweep.output.mkdir(parents=True, exist_ok=True)
     payload = {"sweep": str(sweep.path), "base": sweep.base, "cases": rows}
-    _write_whole(sweep.output / "summary.json", json.dumps(payload, indent=2) + "\n")
+    write_whole(sweep.output / "summary.json", json.dumps(payload, indent=2) + "\n")
     columns: list[str] = []
     for r in rows:
         columns += [k for k in r if k not in columns]
@@ -219,7 +214,7 @@ def write_summary(sweep: Sweep, rows: list[dict[str, Any]]) -> None:
     w.writeheader()
     for r in rows:
         w.writerow(r)
-    _write_whole(sweep.output / "summary.csv", buf.getvalue())
+    write_whole(sweep.output / "summary.csv", buf.getvalue())
 
 
 def run_sweep(sweep: Sweep, log: Any = None) -> list[dict[str, Any]]:
