@@ -518,25 +518,26 @@ def bench_mpi(
     for p in (direct, via, base.path):
         shutil.rmtree(p, ignore_errors=True)
     return {
-        "benchmark": "mpi",
-        "preset": preset,
-        "cells_across": n,
-        "cells": base.mesh.cells if base.mesh else 0,
+        **_record("mpi", preset, n, base),
         "end_time_s": end_time,
-        "machine": machine_info(),
-        "commit": _git_commit(),
         "rows": rows,
         "runner": overhead,
     }
 
 
-def mpi_report(result: dict[str, Any]) -> str:
-    """Markdown tables of an MPI benchmark."""
+def _machine_3d(result: dict[str, Any]) -> str:
+    """Return the opening of a 3D benchmark's table: machine, commit, case."""
     m = result["machine"]
-    lines = [
+    return (
         f"Machine: {m['cpu']}, {m['cores']} cores; commit {result['commit']}; "
         f"{result['preset']} in 3D, {result['cells']:,} cells ({result['cells_across']} across), "
-        f"0 to {result['end_time_s']} s.",
+    )
+
+
+def mpi_report(result: dict[str, Any]) -> str:
+    """Markdown tables of an MPI benchmark."""
+    lines = [
+        f"{_machine_3d(result)}0 to {result['end_time_s']} s.",
         "",
         "| ranks | steps | solver wall [s] | ms/step | speed-up | decomposePar [s] |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -560,4 +561,94 @@ def mpi_report(result: dict[str, Any]) -> str:
         "",
         f"Runner overhead per step (medians): {o['overhead']:+.1%}.",
     ]
+    return "\n".join(lines)
+
+
+def bench_post(target_cells: int, n_times: int, work_dir: Path, ranks: int = 2) -> dict[str, Any]:
+    """Cost of ``foamsilo post`` on a 3D silo with many written times.
+
+    The lab silo of Zhou et al. in 3D at the resolution closest to
+    ``target_cells``, run on ``ranks`` ranks for ``n_times`` written times
+    (one every 0.2 ms: the solver shortens its step to hit each), then
+    post-processed twice: straight from the processor directories, and after
+    reconstructPar. The wall time of :func:`foamsilo.post.summarize` is the
+    figure (Q(t) and the steady analysis, the free surface at every written
+    time, the profile, the stagnant fraction, the pictures, the report).
+    """
+    import resource
+
+    from foamsilo.foam import run_utility
+
+    of = find_openfoam()
+    solver = ensure_solver(of=of)
+    preset = "zhou-cyl-bottom"
+    interval = 2e-4
+    end = round(n_times * interval, 10)
+    sets = ["mesh.representation='3d'", f"run.end_time={end}", f"run.write_interval={interval}"]
+    n, _ = _cells_across_for(preset, sets, target_cells)
+    scene = load_preset(preset, [*sets, f"mesh.cells_across={n}"])
+    case = create_case(scene, Path(work_dir) / "post", of, overwrite=True)
+    res = run_solver(case.path, of, solver, n_procs=ranks)
+    rows = []
+    for label in ("decomposed", "reconstructed"):
+        if label == "reconstructed":
+            run_utility(of, case.path, "reconstructPar")
+            for p in case.path.glob("processor*"):
+                shutil.rmtree(p)
+        t0 = time.perf_counter()
+        s = summarize(case.path)
+        wall = time.perf_counter() - t0
+        if "error" in s["fields"]:
+            raise FoamsiloError(f"bench post: fields not reduced: {s['fields']['error']}")
+        surface_rows = len((case.path / "free_surface.csv").read_text().splitlines()) - 1
+        times = len([p for p in (case.path / "processor0" if label == "decomposed"
+                                 else case.path).iterdir() if _is_time(p.name)])  # fmt: skip
+        rows.append({"read": s["fields"]["case_type"], "written_times": times,
+                     "surface_rows": surface_rows, "post_wall_s": round(wall, 2)})  # fmt: skip
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    shutil.rmtree(case.path, ignore_errors=True)
+    return {
+        **_record("post", preset, n, case),
+        "ranks": ranks,
+        "solver_wall_s": round(res.wall_seconds, 1),
+        "steps": res.steps,
+        "rows": rows,
+        "max_rss_mb": round(rss, 1),
+    }
+
+
+def _record(name: str, preset: str, cells_across: int, case: Any) -> dict[str, Any]:
+    """Return the fields every 3D benchmark record starts with."""
+    return {
+        "benchmark": name,
+        "preset": preset,
+        "cells_across": cells_across,
+        "cells": case.mesh.cells if case.mesh else 0,
+        "machine": machine_info(),
+        "commit": _git_commit(),
+    }
+
+
+def _is_time(name: str) -> bool:
+    try:
+        float(name)
+    except ValueError:
+        return False
+    return True
+
+
+def post_report(result: dict[str, Any]) -> str:
+    """Markdown table of a post-processing benchmark."""
+    lines = [
+        f"{_machine_3d(result)}run on {result['ranks']} ranks ({result['steps']} steps, "
+        f"{result['solver_wall_s']} s).",
+        "",
+        "| fields read from | written times (0 included) | free-surface rows | "
+        "`foamsilo post` wall [s] |",
+        "| --- | --- | --- | --- |",
+    ]
+    for r in result["rows"]:
+        lines.append(f"| {r['read']} | {r['written_times']} | {r['surface_rows']} "
+                     f"| {r['post_wall_s']:.1f} |")  # fmt: skip
+    lines += ["", f"Peak memory of the benchmark process: {result['max_rss_mb']:.0f} MB."]
     return "\n".join(lines)

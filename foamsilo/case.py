@@ -129,8 +129,12 @@ def template_context(scene: Scene) -> dict[str, Any]:
         if rep == "planar"
         else scene.q_air * scene.mesh_fraction,
         # taps on the axis: dense over the first D, then up to the top
-        "axis_probes": [D * (k + 0.5) / 20 for k in range(20)]
-        + [D + (H - D) * (k + 0.5) / n_probes for k in range(n_probes)],
+        # (and the scene's own taps)
+        "axis_probes": sorted(
+            {D * (k + 0.5) / 20 for k in range(20)}
+            | {D + (H - D) * (k + 0.5) / n_probes for k in range(n_probes)}
+            | set(scene.gas.taps)
+        ),
         "friction_velocity": 1e-3 * (scene.gravity * scene.silo.width) ** 0.5,
         "friction_relaxation": scene.numerics.friction_relaxation,
     }

@@ -523,6 +523,31 @@ def cmd_post(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Set a case's or sweep's steady rates on the analytic curves."""
+    from foamsilo.compare import compare
+    from foamsilo.report import sweep_report
+
+    target = Path(args.target).resolve()
+    result = compare(target)
+    if result["kind"] == "sweep":
+        result["report"] = str(sweep_report(target))
+
+    def human() -> None:
+        con = _console()
+        for p in result["points"]:
+            con.print(
+                f"{Path(p['case']).name}: Q = {p['q']:.5g} {p['units']}, {p['law']} "
+                f"{p['q_law']:.5g} ({p['rel_error']:+.1%})"
+            )
+        for sk in result["skipped"]:
+            con.print(f"{Path(sk['case']).name}: not compared ({sk['reason']})")
+        con.print(f"rms {result['rms_rel_error']:.1%}; table and plot in {target}/compare.md")
+
+    _emit(args, {"ok": True, **result}, human)
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """Run a benchmark and append its result to the log in docs/."""
     from foamsilo.bench import bench_solver, solver_table, write_result
@@ -534,6 +559,20 @@ def cmd_bench(args: argparse.Namespace) -> int:
         if args.output:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
+        return 0
+    if args.suite == "post":
+        from foamsilo.bench import bench_post, post_report
+
+        default = args.cells == ["32", "64"]
+        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
+            work = Path(args.work_dir) if args.work_dir else Path(tmp)
+            res = bench_post(65000 if default else int(args.cells[0]), args.times, work)
+        text = post_report(res)
+        if args.log:
+            write_result(res, Path(args.log).with_name("post.jsonl"))
+        if args.output:
+            Path(args.output).write_text(text + "\n")
+        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
         return 0
     if args.suite in ("mesh", "mpi"):
         from foamsilo.bench import bench_mesh, bench_mpi, mesh_report, mpi_report
@@ -745,8 +784,11 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("sweep", help="sweep TOML file (see foamsilo/sweep.py for the format)")
     sp.add_argument("--quiet", action="store_true", help="no per-case messages")
 
-    sp = add("post", cmd_post, "post-process a case: Q(t), steady Q, plot, summary")
+    sp = add("post", cmd_post, "post-process a case: Q(t), steady Q, fields, pictures, report")
     sp.add_argument("case", help="case directory")
+
+    sp = add("compare", cmd_compare, "simulation points on the analytic curves, with errors")
+    sp.add_argument("target", help="case directory, or a sweep's output directory")
 
     add("build-solver", cmd_build_solver, "build siloFoam and its mu(I) library").add_argument(
         "--if-needed", action="store_true", help="only if the sources changed"
@@ -778,14 +820,16 @@ def build_parser() -> argparse.ArgumentParser:
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
         "suite",
-        choices=["solver", "gas", "mesh", "mpi", "report"],
+        choices=["solver", "gas", "mesh", "mpi", "post", "report"],
         help="solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
         "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
         "1000000); mpi: speed-up over --ranks and the runner's overhead on a 3D silo "
-        "(--cells: target cells, default 65000; --end-time default 0.02 s); "
+        "(--cells: target cells, default 65000; --end-time default 0.02 s); post: cost of "
+        "`foamsilo post` on a 3D silo of --cells (default 65000) with --times written times; "
         "report: tables from --log",
     )
     sp.add_argument("--ranks", nargs="+", default=["1", "2"], help="mpi: MPI rank counts")
+    sp.add_argument("--times", type=int, default=100, help="post: written times")
     sp.add_argument("-o", "--output", help="report: write the Markdown here")
     sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")
     sp.add_argument("--end-time", type=float, default=1.0, help="simulated time per run [s]")

@@ -32,6 +32,13 @@ CAP_FRACTION = 0.99
 #: Volume fraction that marks the free surface
 SURFACE_ALPHA = 0.5
 ALPHA = "alpha.granular"
+#: How a case's fields are read: decomposed when only processor*/ hold results
+CASE_TYPES = ("auto", "reconstructed", "decomposed")
+
+
+def _integrate(y: np.ndarray, x: np.ndarray) -> float:
+    """Trapezoidal rule (numpy's is named differently across 1.x and 2.x)."""
+    return float(np.sum((y[1:] + y[:-1]) * np.diff(x)) / 2) if len(x) > 1 else math.nan
 
 
 class CaseFields:
@@ -41,6 +48,9 @@ class CaseFields:
     ----------
     case
         A case directory written by ``foamsilo new`` / ``foamsilo run``.
+    case_type
+        ``auto`` (the processor directories when only they hold results),
+        ``reconstructed`` or ``decomposed``.
 
     Raises
     ------
@@ -48,22 +58,33 @@ class CaseFields:
         The directory is not a case, or holds no written time.
     """
 
-    def __init__(self, case: Path) -> None:
+    def __init__(self, case: Path, case_type: str = "auto") -> None:
         import pyvista as pv
 
         self.case = Path(case).resolve()
         foam = self.case / "case.foam"
         if not foam.exists() or not (self.case / SCENE_FILE).exists():
             raise FoamsiloError(f"{self.case} is not a foamsilo case (no case.foam/scene.toml)")
+        if case_type not in CASE_TYPES:
+            raise FoamsiloError(
+                f"case_type {case_type!r}: allowed: " + ", ".join(map(repr, CASE_TYPES))
+            )
         self.scene: Scene = load_scene_file(self.case / SCENE_FILE)
         self._reader = pv.POpenFOAMReader(str(foam))
-        serial = [t for t in self._reader.time_values if t > 0]
-        if not serial and (self.case / "processor0").is_dir():
-            self._reader.case_type = "decomposed"
+        if case_type == "auto":
+            serial = [t for t in self._reader.time_values if t > 0]
+            if not serial and (self.case / "processor0").is_dir():
+                case_type = "decomposed"
+            else:
+                case_type = "reconstructed"
+        if case_type == "decomposed" and not (self.case / "processor0").is_dir():
+            raise FoamsiloError(f"{self.case}: case_type 'decomposed' but no processor0/")
+        self._reader.case_type = case_type
         self._reader.cell_to_point_creation = False
         self._reader.disable_all_patch_arrays()
         self._reader.enable_patch_array("internalMesh")
-        self._cache: dict[float, Any] = {}
+        self._cache: dict[tuple[float, tuple[str, ...] | None], Any] = {}
+        self._geometry: tuple[int, np.ndarray, np.ndarray] | None = None
 
     # --------------------------------------------------------------- properties
     @property
@@ -94,16 +115,45 @@ class CaseFields:
         valid = ", ".join(f"{t:g}" for t in self.times)
         raise FoamsiloError(f"time {time:g} s is not written in {self.case}; valid: {valid}")
 
-    def mesh(self, time: float) -> Any:
-        """Return the internal mesh at ``time`` with its cell fields (a pyvista grid)."""
+    def mesh(self, time: float, fields: tuple[str, ...] | None = None) -> Any:
+        """Return the internal mesh at ``time`` with its cell fields (a pyvista grid).
+
+        ``fields`` limits what is read (all by default): reading one field of
+        a 3D case is several times faster than reading all of them.
+        """
         t = self._check_time(time)
-        if t not in self._cache:
+        key = (t, fields)
+        if key not in self._cache:
             self._reader.set_active_time_value(t)
-            data = self._reader.read()
-            grid = data["internalMesh"]
-            grid = grid.compute_cell_sizes(length=False, area=False, volume=True)
-            self._cache = {t: grid}  # one time at a time: 3D meshes are large
-        return self._cache[t]
+            if fields is None:
+                self._reader.enable_all_cell_arrays()
+            else:
+                self._reader.disable_all_cell_arrays()
+                for name in fields:
+                    self._reader.enable_cell_array(name)
+            grid = self._reader.read()["internalMesh"]
+            # the mesh does not move: cell volumes and centres are computed once
+            if self._geometry is None or self._geometry[0] != grid.n_cells:
+                sized = grid.compute_cell_sizes(length=False, area=False, volume=True)
+                centres = np.asarray(grid.cell_centers().points)
+                self._geometry = (grid.n_cells, np.asarray(sized.cell_data["Volume"]), centres)
+            self._cache = {key: grid}  # one time at a time: 3D meshes are large
+        return self._cache[key]
+
+    def _geom(self) -> tuple[int, np.ndarray, np.ndarray]:
+        """Cell count, volumes and centres (read with the first time if needed)."""
+        if self._geometry is None:
+            self.mesh(self.times[0], (ALPHA,))
+        assert self._geometry is not None
+        return self._geometry
+
+    @property
+    def _volumes(self) -> np.ndarray:
+        return self._geom()[1]
+
+    @property
+    def _centres(self) -> np.ndarray:
+        return self._geom()[2]
 
     def _field(self, grid: Any, name: str) -> np.ndarray:
         if name not in grid.cell_data:
@@ -114,13 +164,13 @@ class CaseFields:
     # ---------------------------------------------------------------- reductions
     def granular_volume(self, time: float) -> float:
         """Volume of grains in the silo [m^3] (per unit depth in a planar scene: [m^2])."""
-        g = self.mesh(time)
-        v = float(np.sum(self._field(g, ALPHA) * g.cell_data["Volume"]))
+        g = self.mesh(time, (ALPHA,))
+        v = float(np.sum(self._field(g, ALPHA) * self._volumes))
         return v / self.scene.mesh_fraction
 
-    def _horizontal(self, grid: Any) -> np.ndarray:
+    def _horizontal(self) -> np.ndarray:
         """Horizontal coordinate of cell centres: x (planar, box) or radius."""
-        c = grid.cell_centers().points
+        c = self._centres
         if self.scene.representation == "planar" or self.scene.silo.shape == "rectangular":
             return c[:, 0]
         return np.hypot(c[:, 0], c[:, 2])
@@ -135,10 +185,10 @@ class CaseFields:
         above the orifice), the last the wall. (In a hopper the bands are not
         prisms and the heights are approximate; the mean is exact.)
         """
-        g = self.mesh(time)
+        g = self.mesh(time, (ALPHA,))
         alpha = self._field(g, ALPHA)
-        vol = np.asarray(g.cell_data["Volume"])
-        h = self._horizontal(g)
+        vol = self._volumes
+        h = self._horizontal()
         height = self.scene.silo.height
         lo, hi = float(h.min()), float(h.max())
         if self.scene.representation == "planar" or self.scene.silo.shape == "rectangular":
@@ -161,14 +211,18 @@ class CaseFields:
         """Velocity across the silo on a horizontal line at ``height`` [m].
 
         Returns the positions (x, or r from the axis), the horizontal and
-        vertical velocity [m/s] and the volume fraction along the line.
+        vertical velocity [m/s] and the volume fraction along the line, and
+        ``mass_flow``: the grains' mass flow down through the line,
+        rho int(-alpha v) dx per unit depth (planar) or rho int(-alpha v) 2 pi r dr
+        (axisymmetric flow: wedges and centred 3D cylinders), NaN otherwise.
+        In a steady discharge it equals the orifice rate Q.
         """
         s = self.scene
         if not 0.0 < height < s.silo.height:
             raise FoamsiloError(
                 f"height {height:g} m: must be inside the silo (0, {s.silo.height:g}) m"
             )
-        g = self.mesh(time)
+        g = self.mesh(time, (ALPHA, "U"))
         rep = s.representation
         eps = 1e-6 * s.silo.width
         if rep == "planar":
@@ -187,19 +241,27 @@ class CaseFields:
         pos = pts[:, 0] if rep != "axisymmetric" else np.hypot(pts[:, 0], pts[:, 2])
         u = np.asarray(line.point_data["U"])[inside]
         alpha = np.asarray(line.point_data[ALPHA])[inside]
+        down = -alpha * u[:, 1] * s.material.density
+        if rep == "planar":
+            mass_flow = _integrate(down, pos)
+        elif s.silo.shape != "rectangular" and s.silo.eccentricity == 0.0:
+            mass_flow = _integrate(down * 2 * np.pi * pos, pos)
+        else:
+            mass_flow = math.nan
         return {
             "position_m": pos,
             "u_horizontal": u[:, 0],
             "u_vertical": u[:, 1],
             "alpha": alpha,
+            "mass_flow": mass_flow,
         }
 
     def stagnant_fraction(self, time: float) -> float:
         """Fraction of the granular volume whose viscosity sits at the cap."""
-        g = self.mesh(time)
+        g = self.mesh(time, (ALPHA, "nu1"))
         alpha = self._field(g, ALPHA)
         nu = self._field(g, "nu1")
-        w = alpha * g.cell_data["Volume"]
+        w = alpha * self._volumes
         total = float(np.sum(w))
         if total <= 0:
             return math.nan
@@ -251,8 +313,7 @@ class CaseFields:
         for k in (2, 3):
             panels[k] = (panels[k][0], np.where(air, np.nan, panels[k][1]), panels[k][2])
         for ax, (title, values, cmap_name) in zip(axes, panels, strict=True):
-            cmap = matplotlib.colormaps[cmap_name].copy()
-            cmap.set_bad("0.85")
+            cmap = matplotlib.colormaps[cmap_name].with_extremes(bad="0.85")
             coll = PolyCollection(
                 polys, array=np.ma.masked_invalid(values), cmap=cmap, edgecolors="none"
             )
@@ -275,7 +336,9 @@ class CaseFields:
 #: Height of the velocity profile, as a fraction of the silo height (Venier Fig. 3)
 PROFILE_HEIGHT = 0.15
 PROFILE_CSV = "profile_U.csv"
+PROFILE_PNG = "profile_U.png"
 SURFACE_CSV = "free_surface.csv"
+SURFACE_PNG = "free_surface.png"
 FIELDS_PNG = "fields.png"
 
 
@@ -292,21 +355,56 @@ def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
     os.replace(tmp, path)
 
 
-def field_summary(case: Path) -> dict[str, Any]:
+def plot_profile(prof: dict[str, Any], scene: Scene, time: float, path: Path) -> None:
+    """Vertical and horizontal grain velocity across the silo at one height (PNG)."""
+    from foamsilo.plots import finish, subplots
+
+    fig, ax = subplots(size=(6, 4))
+    x = prof["position_m"]
+    ax.plot(x, prof["u_vertical"], "C0-", label="vertical $u_y$")
+    ax.plot(x, prof["u_horizontal"], "C1--", label="horizontal $u_x$")
+    ax.axhline(0, color="0.6", lw=0.8)
+    ax.set_xlabel("r [m]" if scene.representation == "axisymmetric" else "x [m]")
+    ax.set_ylabel("grain velocity [m/s]")
+    ax.set_title(
+        f"{scene.name}: y = {prof['height_m']:.4g} m ({PROFILE_HEIGHT:g} H), t = {time:g} s",
+        fontsize=9,
+    )
+    finish(fig, ax, path)
+
+
+def plot_free_surface(series: np.ndarray, scene: Scene, path: Path) -> None:
+    """Free-surface heights (axis, wall, mean) against time (PNG)."""
+    from foamsilo.plots import finish, subplots
+
+    fig, ax = subplots(size=(6, 4))
+    for k, (label, style) in enumerate(
+        (("on the axis (crater)", "C3o-"), ("at the wall", "C2s-"), ("mean (volume / area)", "k-"))
+    ):
+        ax.plot(series[:, 0], series[:, k + 1], style, ms=3, label=label)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("free-surface height [m]")
+    ax.set_title(f"{scene.name}: free surface", fontsize=9)
+    finish(fig, ax, path)
+
+
+def field_summary(case: Path, case_type: str = "auto") -> dict[str, Any]:
     """Reduce the written fields of a case; write the profile, surface and picture files.
 
     At the latest written time: the free surface (axis, wall, mean), the
-    stagnant fraction, the velocity profile at 0.15 H (``profile_U.csv``) and
-    the mid-plane picture (``fields.png``); over every written time, the free
-    surface (``free_surface.csv``).
+    stagnant fraction, the velocity profile at 0.15 H (``profile_U.csv``,
+    ``profile_U.png``) with the mass flow through it, and the mid-plane
+    picture (``fields.png``); over every written time, the free surface
+    (``free_surface.csv``, ``free_surface.png``).
     """
-    f = CaseFields(case)
+    f = CaseFields(case, case_type)
     later = [t for t in f.times if t > 0]
     if not later:
         raise FoamsiloError(f"{f.case}: no time written after 0")
     t = later[-1]
     height = PROFILE_HEIGHT * f.scene.silo.height
     prof = f.velocity_profile(t, height)
+    prof["height_m"] = height
     _write_csv(
         f.case / PROFILE_CSV,
         ["position_m", "u_horizontal_m_s", "u_vertical_m_s", "alpha"],
@@ -314,20 +412,24 @@ def field_summary(case: Path) -> dict[str, Any]:
             [prof["position_m"], prof["u_horizontal"], prof["u_vertical"], prof["alpha"]]
         ).tolist(),
     )
+    plot_profile(prof, f.scene, t, f.case / PROFILE_PNG)
     series = []
-    for tt in later:
+    for tt in [x for x in f.times if x >= 0]:
         s = f.free_surface(tt)
         series.append([tt, s["axis_m"], s["wall_m"], s["mean_m"]])
     _write_csv(f.case / SURFACE_CSV, ["t_s", "axis_m", "wall_m", "mean_m"], series)
+    plot_free_surface(np.array(series), f.scene, f.case / SURFACE_PNG)
     f.picture(t, f.case / FIELDS_PNG)
     grains = prof["alpha"] >= SURFACE_ALPHA
     return {
         "time_s": t,
+        "case_type": f._reader.case_type,
         "free_surface_m": f.free_surface(t),
         "stagnant_fraction": f.stagnant_fraction(t),
         "profile_height_m": height,
+        "profile_mass_flow": prof["mass_flow"],
         "profile_max_downward_m_s": float(-np.min(prof["u_vertical"][grains]))
         if grains.any()
         else None,
-        "files": [PROFILE_CSV, SURFACE_CSV, FIELDS_PNG],
+        "files": [PROFILE_CSV, PROFILE_PNG, SURFACE_CSV, SURFACE_PNG, FIELDS_PNG],
     }

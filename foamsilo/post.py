@@ -33,7 +33,7 @@ from foamsilo.analytic.beverloo import (
     beverloo_2d,
     beverloo_2d_constant,
 )
-from foamsilo.case import SCENE_FILE, read_metadata
+from foamsilo.case import SCENE_FILE, read_metadata, write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.scene import Scene, load_scene_file
 
@@ -487,10 +487,27 @@ def summarize(case: Path, run_info: dict[str, Any] | None = None) -> dict[str, A
         summary["run"] = run_info
     write_discharge_csv(d, scene, case / DISCHARGE_CSV)
     plot_discharge(d, st, scene, case / DISCHARGE_PNG)
-    tmp = case / (SUMMARY_JSON + ".tmp")
-    tmp.write_text(json.dumps(summary, indent=2, default=float))
-    os.replace(tmp, case / SUMMARY_JSON)
+    _write_summary(case, summary)
+    _compare_and_report(case, summary)
+    _write_summary(case, summary)  # now with the comparison
     return summary
+
+
+def _write_summary(case: Path, summary: dict[str, Any]) -> None:
+    write_whole(case / SUMMARY_JSON, json.dumps(summary, indent=2, default=float))
+
+
+def _compare_and_report(case: Path, summary: dict[str, Any]) -> None:
+    """Set the case on its analytic law (when it has one) and write ``report.md``."""
+    from foamsilo.compare import COMPARE_MD, compare
+    from foamsilo.report import case_report
+
+    try:
+        summary["compare"] = {k: v for k, v in compare(case).items() if k != "target"}
+    except FoamsiloError as exc:  # no law for this geometry, or no steady rate
+        (case / COMPARE_MD).unlink(missing_ok=True)
+        summary["compare"] = {"error": str(exc)}
+    case_report(case, summary)
 
 
 __all__ = [
@@ -594,6 +611,9 @@ class PorePressure:
     gas_flux
         Mean relative gas flux out through the orifice [m^3/s, per unit
         depth for planar]; negative: air drawn in.
+    taps
+        The scene's taps (``gas.taps``): height [m] and mean pore pressure
+        [Pa] (None where the tap was above the grains for most of the window).
     """
 
     y: np.ndarray
@@ -606,6 +626,7 @@ class PorePressure:
     gradient_orifice_measured: float
     zone_gradient: float
     gas_flux: float
+    taps: list[dict[str, float | None]]
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form."""
@@ -633,6 +654,10 @@ def pore_pressure(case: Path, scene: Scene, d: Discharge, st: SteadyState) -> Po
     ok = counts > 0.2 * max(1, win.sum())
     mean = np.where(ok, np.sum(np.where(inside, p, 0.0), axis=0) / np.maximum(counts, 1), np.nan)
     ym, pm = y[ok], mean[ok]
+    taps: list[dict[str, float | None]] = []
+    for tap in scene.gas.taps:
+        k = int(np.argmin(np.abs(y - tap)))
+        taps.append({"y": float(y[k]), "pressure": float(mean[k]) if ok[k] else None})
     # relative gas flux through the orifice, from the mass balance
     q_air = scene.q_air_per_depth if planar else scene.q_air
     relative = q_air - st.q / scene.material.density
@@ -649,7 +674,7 @@ def pore_pressure(case: Path, scene: Scene, d: Discharge, st: SteadyState) -> Po
     wg = (gas[:, 0] >= st.t_start) & (gas[:, 0] <= st.t_end)
     flux = float(np.mean(gas[wg, 1]) / d.depth) if wg.any() else math.nan
     return PorePressure(
-        ym, pm, g_near, g_far, c_far, y_star, g_far_fit, resistance * flux / s_o, zone, flux
+        ym, pm, g_near, g_far, c_far, y_star, g_far_fit, resistance * flux / s_o, zone, flux, taps
     )
 
 
@@ -658,6 +683,7 @@ def _pore_pressure_summary(
 ) -> dict[str, Any]:
     """Pore-pressure figures of Zhou et al. Figs 5b and 6b, dimensional and scaled."""
     pp = pore_pressure(case, scene, d, st)
+    plot_pore_pressure(pp, scene, Path(case) / PORE_PRESSURE_PNG)
     rho_g = scene.material.density * scene.gravity
     L, D = scene.silo.width, scene.silo.orifice_width
     q_air = scene.q_air_per_depth if scene.representation == "planar" else scene.q_air
@@ -679,3 +705,31 @@ def _pore_pressure_summary(
         # Fig. 6b abscissa: eta_f/(rho g kappa_v S_o) (Q_air - Q/rho) = near slope / rho g
         "fig6b_abscissa": pp.gradient_near / rho_g,
     }
+
+
+PORE_PRESSURE_PNG = "pore_pressure.png"
+
+
+def plot_pore_pressure(pp: PorePressure, scene: Scene, path: Path) -> None:
+    """Mean pore pressure along the axis with the two lines of Zhou Fig. 5b (PNG)."""
+    from foamsilo.plots import finish, subplots
+
+    D = scene.silo.orifice_width
+    fig, ax = subplots()
+    ax.plot(pp.y / D, pp.pressure, "k.", ms=4, label="axis probes (mean over the steady window)")
+    tap_y = [t["y"] for t in pp.taps if t["pressure"] is not None]
+    tap_p = [t["pressure"] for t in pp.taps if t["pressure"] is not None]
+    if tap_y:
+        ax.plot(np.array(tap_y) / D, tap_p, "C3s", ms=7, mfc="none", label="taps (gas.taps)")
+    yy = np.linspace(0, float(pp.y.max()) if pp.y.size else D, 100)
+    ax.plot(yy / D, pp.gradient_near * yy, "C0--", lw=1, label="near orifice: eq. 20 slope")
+    ax.plot(yy / D, pp.gradient_far * yy + pp.far_intercept, "C1-", lw=1,
+            label="far: Darcy slope over the silo section")  # fmt: skip
+    lo = float(np.nanmin(pp.pressure)) if pp.pressure.size else 0.0
+    hi = float(np.nanmax(pp.pressure)) if pp.pressure.size else 1.0
+    pad = 0.1 * max(hi - lo, 1e-9)
+    ax.set_ylim(lo - pad, hi + pad)
+    ax.set_xlabel("height above the orifice y/D")
+    ax.set_ylabel("pore pressure p_f [Pa]")
+    ax.set_title(f"{scene.name}: pore pressure on the axis ({scene.gas.mode})", fontsize=9)
+    finish(fig, ax, path, legend_size=7)

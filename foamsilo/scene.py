@@ -273,6 +273,13 @@ class Gas:
         le=1e6,
         default=100.0,
     )
+    taps: tuple[float, ...] = _f(
+        "heights of pore-pressure taps on the silo axis above the floor (each < silo.height); "
+        "their mean pressure over the steady regime is reported",
+        "m",
+        gt=0,
+        default=(),
+    )
 
 
 @dataclass(frozen=True)
@@ -630,6 +637,10 @@ def _convert(name: str, value: Any, typ: Any, meta: dict[str, Any]) -> Any:
         if value not in args:
             raise SceneError(name, f"got {value!r}; allowed: {', '.join(map(repr, args))}")
         return value
+    if origin is tuple:  # tuple[float, ...]: a TOML array of numbers
+        if not isinstance(value, (list, tuple)):
+            raise SceneError(name, f"got {value!r}; allowed: a list of numbers")
+        return tuple(_check_number(f"{name}[{i}]", v, args[0], meta) for i, v in enumerate(value))
     if args and type(None) in args:  # Optional[X]
         inner = [a for a in args if a is not type(None)][0]
         return _convert(name, value, inner, meta)
@@ -857,6 +868,16 @@ def _validate_gas(scene: Scene) -> None:
         raise SceneError(
             "gas.permeability", "give gas.permeability or gas.permeability_scaled, not both"
         )
+    for i, y in enumerate(g.taps):
+        if y >= s.height:
+            raise SceneError(
+                f"gas.taps[{i}]", f"got {y:g} m; allowed: > 0 and < silo.height ({s.height:g} m)"
+            )
+    if g.taps and g.mode == "open-top":
+        raise SceneError(
+            "gas.taps",
+            "an open-top silo has no pore pressure; taps need gas.mode closed-top or injection",
+        )
     if m.wall_friction:
         if not s.thickness:
             raise SceneError("material.wall_friction", "needs silo.thickness (the wall gap W)")
@@ -969,6 +990,8 @@ def to_toml(data: dict[str, Any]) -> str:
             return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
         if isinstance(v, float):
             return repr(v)
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(fmt(x) for x in v) + "]"
         return str(v)
 
     lines = [f"{k} = {fmt(v)}" for k, v in data.items() if not isinstance(v, dict)]
@@ -1001,7 +1024,7 @@ def reference_markdown() -> str:
                 if isinstance(f.default, bool):
                     default = f"`{str(f.default).lower()}`"
                 else:
-                    default = "-" if f.default in (None, "") else f"`{f.default}`"
+                    default = "-" if f.default in (None, "", ()) else f"`{f.default}`"
             else:
                 default = "required"
             rows.append(

@@ -240,4 +240,18 @@ def run_sweep(sweep: Sweep, log: Any = None) -> list[dict[str, Any]]:
     write_summary(sweep, rows)
     if all(r["status"] == "pending" for r in rows):
         raise FoamsiloError("no case ran")
+    _compare_and_report(sweep.output, say)
     return rows
+
+
+def _compare_and_report(output: Path, say: Any) -> None:
+    """Set the sweep's points on the analytic curves; write its ``report.md``."""
+    from foamsilo.compare import COMPARE_MD, compare
+    from foamsilo.report import sweep_report
+
+    try:
+        compare(output)
+    except FoamsiloError as exc:
+        (output / COMPARE_MD).unlink(missing_ok=True)
+        say(f"no comparison with an analytic law: {exc}")
+    say(f"report: {sweep_report(output)}")

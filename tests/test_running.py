@@ -67,6 +67,15 @@ def test_two_ranks_through_a_hostfile_match_the_serial_rate(tmp_path, serial_16)
     assert s["Q"] == pytest.approx(serial_16["Q"], rel=0.01)
     # the grains are still conserved across the rank boundary
     assert s["mass_balance_rel_error"] < 1e-8
+    # the fields read from the processor directories equal the reconstructed ones
+    from foamsilo.fields import CaseFields
+
+    parts, whole = CaseFields(case, "decomposed"), CaseFields(case, "reconstructed")
+    assert parts.decomposed and not whole.decomposed
+    assert parts.times == whole.times
+    v = parts.granular_volume(0.5)
+    assert v == pytest.approx(whole.granular_volume(0.5), rel=1e-6)
+    assert v == pytest.approx(s["fields"]["free_surface_m"]["mean_m"] * 0.1, rel=1e-6)
 
 
 def _kill_when(
@@ -206,3 +215,8 @@ def test_interrupted_sweep_resumes_without_rerunning_finished_cases(tmp_path, so
         assert b / a == pytest.approx((db / da) ** 1.5, rel=0.10)
     # the table exists as CSV too, one row per case
     assert len((out / "summary.csv").read_text().strip().splitlines()) == 4
+    # the sweep's points on the 2D Beverloo curve (compare), and its report
+    table = json.loads((out / "compare.json").read_text())
+    assert [p["law"] for p in table["points"]] == ["beverloo-2d"] * 3
+    assert all(abs(p["rel_error"]) < 0.15 for p in table["points"])
+    assert "compare.png" in (out / "report.md").read_text()

@@ -178,6 +178,10 @@ def test_air_flow_units():
         (["gas.permeability=1e-10", "gas.permeability_scaled=1"], "gas.permeability", "not both"),
         (["gas.packing_fraction=1.2"], "gas.packing_fraction", "< 1"),
         (["gas.inertial=1"], "gas.inertial", "true, false"),
+        (['gas.mode="closed-top"', "gas.taps=[0.1, 0.5]"], "gas.taps[1]", "< silo.height (0.4 m)"),
+        (['gas.mode="closed-top"', "gas.taps=[-0.1]"], "gas.taps[0]", "a number > 0 m"),
+        (['gas.mode="closed-top"', "gas.taps=0.1"], "gas.taps", "a list of numbers"),
+        (["gas.taps=[0.1]"], "gas.taps", "open-top silo has no pore pressure"),
     ],
 )
 def test_gas_errors_name_the_field(overrides, field, text):
@@ -202,3 +206,15 @@ def test_zhou_planar_gas_preset():
     assert s.gas.permeability_scaled == 1.0 and not s.gas.inertial
     assert s.gas.permeability_ratio == 100
     assert s.q_air_per_depth / math.sqrt(9.81 * L**3) == pytest.approx(0.5)
+
+
+def test_pressure_taps_reach_the_probes_and_roundtrip(tmp_path):
+    from foamsilo.case import template_context
+
+    s = load_preset("zhou-planar", ['gas.mode="closed-top"', "gas.taps=[0.1, 0.2]"])
+    assert s.gas.taps == (0.1, 0.2)
+    probes = template_context(s)["axis_probes"]
+    assert {0.1, 0.2} <= set(probes) and probes == sorted(probes)
+    path = tmp_path / "s.toml"
+    path.write_text(to_toml(s.to_dict()))
+    assert load_scene_file(path).gas.taps == (0.1, 0.2)

@@ -1,0 +1,159 @@
+"""Markdown reports a user opens: one per case, one per sweep.
+
+``report.md`` sits beside the figures it shows (relative links), so a case
+or sweep directory can be copied, zipped or opened in any Markdown viewer
+(GitHub, VS Code, pandoc to HTML) as it is.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from foamsilo.case import SCENE_FILE, write_whole
+from foamsilo.scene import load_scene_file
+
+REPORT_MD = "report.md"
+
+
+def _fmt(v: Any, spec: str = ".4g") -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return format(v, spec)
+    return str(v)
+
+
+def case_report(case: Path, summary: dict[str, Any] | None = None) -> Path:
+    """Write ``report.md`` for a post-processed case and return its path."""
+    case = Path(case).resolve()
+    s = summary if summary is not None else json.loads((case / "summary.json").read_text())
+    scene = load_scene_file(case / SCENE_FILE)
+    sil, mat = scene.silo, scene.material
+    run = s.get("run") or {}
+    units = s.get("Q_units", "")
+    out = [
+        f"# {scene.name}: discharge report",
+        "",
+        f"Case `{case.name}/`, {s.get('representation')} mesh of {_fmt(s.get('cells'))} cells "
+        f"({s.get('cells_across')} across L), {s['simulated_time_s']:.4g} s simulated.",
+        "",
+        "## Scene",
+        "",
+        "| silo | L [m] | H [m] | fill [m] | D [m] | grains d [m] | rho [kg/m^3] | gas |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        f"| {sil.shape}, {sil.orifice_position} orifice | {sil.width:g} | {sil.height:g} "
+        f"| {sil.fill_height:g} | {sil.orifice_width:g} | {mat.grain_diameter:g} "
+        f"| {mat.density:g} | {scene.gas.mode} |",
+        "",
+        "## Discharge rate",
+        "",
+    ]
+    if s.get("steady"):
+        w = s["steady_window_s"]
+        out += [
+            f"* steady Q = **{s['Q']:.5g} ± {s['Q_std']:.2g} {units}** "
+            f"(Q* = {s['Q_dimensionless']:.4f}, scale {s['flow_rate_scale']['name']}), "
+            f"mean of the instantaneous rate over t = {w[0]:.3g} to {w[1]:.3g} s;",
+            f"* from the decrease of the granular volume: {s['Q_from_volume']:.5g} {units} "
+            f"({s['flux_vs_volume_rel_diff']:.2%} from the orifice flux);",
+            f"* drift over the window {s['drift']:+.1%}, largest excursion {s['excursion']:.1%};",
+        ]
+        ref = s.get("reference")
+        if ref and ref.get("rel_diff") is not None:
+            out.append(f"* against {ref['source']}: {ref['rel_diff']:+.1%};")
+    else:
+        out.append(f"* **no steady regime**: {s.get('steady_reason')}")
+    out += [
+        f"* grains conserved to {s['mass_balance_rel_error']:.1e} of the initial volume.",
+        "",
+        "![Q(t)](discharge.png)",
+        "",
+    ]
+    f = s.get("fields") or {}
+    if "error" in f:
+        out += ["## Fields", "", f"Field output could not be reduced: {f['error']}", ""]
+    elif f:
+        fs = f["free_surface_m"]
+        out += [
+            "## Fields",
+            "",
+            f"At t = {f['time_s']:g} s (read {f['case_type']}):",
+            "",
+            f"* free surface: {fs['axis_m']:.4g} m on the axis, {fs['wall_m']:.4g} m at the "
+            f"wall, {fs['mean_m']:.4g} m mean;",
+            f"* grains at the viscosity cap (stagnant or moving as a rigid block): "
+            f"{f['stagnant_fraction']:.1%} of the granular volume;",
+            f"* velocity across the silo at y = {f['profile_height_m']:.4g} m (0.15 H): largest "
+            f"downward speed {_fmt(f['profile_max_downward_m_s'], '.3g')} m/s, mass flow "
+            f"through the line {_fmt(f['profile_mass_flow'], '.5g')} {units}.",
+            "",
+            "![mid-plane fields](fields.png)",
+            "",
+            "![velocity profile](profile_U.png) ![free surface](free_surface.png)",
+            "",
+        ]
+    pp = s.get("pore_pressure")
+    if pp:
+        out += [
+            "## Pore pressure",
+            "",
+            f"* gradient near the orifice (eq. 20): {pp['gradient_near']:.4g} Pa/m; far from "
+            f"it: {pp['gradient_far']:.4g} Pa/m (theory), {pp['gradient_far_fit']:.4g} Pa/m "
+            "(least squares over the taps above 1.5 D);",
+            f"* the two lines cross at {pp['slope_change_over_D']:.2f} D above the orifice;",
+            f"* relative gas flux Q_air - Q/rho = {pp['relative_gas_flux']:.4g}, measured "
+            f"through the orifice {pp['relative_gas_flux_measured']:.4g}.",
+            "",
+        ]
+        taps = pp.get("taps") or []
+        if taps:
+            out += ["| tap height [m] | mean pore pressure [Pa] |", "| --- | --- |"]
+            out += [f"| {t['y']:.4g} | {_fmt(t['pressure'], '.5g')} |" for t in taps]
+            out.append("")
+        if (case / "pore_pressure.png").exists():
+            out += ["![pore pressure along the axis](pore_pressure.png)", ""]
+    if (case / "compare.md").exists():
+        out += ["## Against the analytic law", "", (case / "compare.md").read_text(), ""]
+    if run:
+        out += [
+            "## Run",
+            "",
+            f"{_fmt(run.get('steps'))} time steps, {_fmt(run.get('wall_seconds'), '.1f')} s wall, "
+            f"{_fmt(run.get('cpu_seconds'), '.1f')} s CPU on {run.get('n_procs', 1)} rank(s).",
+            "",
+        ]
+    path = case / REPORT_MD
+    write_whole(path, "\n".join(out))
+    return path
+
+
+def sweep_report(output: Path) -> Path:
+    """Write ``report.md`` for a sweep output directory (table, comparison, case links)."""
+    output = Path(output).resolve()
+    table = json.loads((output / "summary.json").read_text())
+    rows = table["cases"]
+    fixed = {"case", "directory", "status", "error"}
+    keys = [k for k in rows[0] if k not in fixed] if rows else []
+    out = [
+        f"# Sweep report: {output.name}",
+        "",
+        f"Base scene `{table['base']}`, {len(rows)} cases "
+        f"({sum(r['status'] == 'ok' for r in rows)} finished). Table: `summary.csv`.",
+        "",
+        "| case | " + " | ".join(keys) + " | status | report |",
+        "| --- | " + " | ".join("---" for _ in keys) + " | --- | --- |",
+    ]
+    for r in rows:
+        d = Path(r["directory"])
+        link = f"[{d.name}]({d}/{REPORT_MD})" if (d / REPORT_MD).exists() else "-"
+        vals = [_fmt(r.get(k)) for k in keys]
+        out.append(f"| {r['case']} | " + " | ".join(vals) + f" | {r['status']} | {link} |")
+    out.append("")
+    if (output / "compare.md").exists():
+        out += ["## Against the analytic laws", "", (output / "compare.md").read_text(), ""]
+        out += ["![simulation points on the analytic curves](compare.png)", ""]
+    path = output / REPORT_MD
+    write_whole(path, "\n".join(out))
+    return path
