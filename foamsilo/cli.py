@@ -548,6 +548,18 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_out(args: argparse.Namespace, res: dict[str, Any], text: str, log_name: str) -> int:
+    """Append a benchmark's record to its log, write its table, print it."""
+    from foamsilo.bench import write_result
+
+    if args.log:
+        write_result(res, Path(args.log).with_name(log_name))
+    if args.output:
+        Path(args.output).write_text(text + "\n")
+    _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     """Run a benchmark and append its result to the log in docs/."""
     from foamsilo.bench import bench_solver, solver_table, write_result
@@ -560,6 +572,24 @@ def cmd_bench(args: argparse.Namespace) -> int:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
         return 0
+    if args.suite == "hopper":
+        from foamsilo.hopper.figures import (
+            plot_work_precision,
+            work_precision,
+            work_precision_markdown,
+        )
+
+        cells = (
+            (25, 50, 100, 200, 400) if args.cells == ["32", "64"] else tuple(map(int, args.cells))
+        )
+        res = work_precision(cells=cells)
+        from foamsilo.bench import _git_commit, machine_info
+
+        res["commit"], res["machine"] = _git_commit(), machine_info()
+        figure = Path(args.figure)
+        figure.parent.mkdir(parents=True, exist_ok=True)
+        plot_work_precision(res, figure)
+        return _bench_out(args, res, work_precision_markdown(res), "hopper.jsonl")
     if args.suite == "post":
         from foamsilo.bench import bench_post, post_report
 
@@ -567,13 +597,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
         with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
             work = Path(args.work_dir) if args.work_dir else Path(tmp)
             res = bench_post(65000 if default else int(args.cells[0]), args.times, work)
-        text = post_report(res)
-        if args.log:
-            write_result(res, Path(args.log).with_name("post.jsonl"))
-        if args.output:
-            Path(args.output).write_text(text + "\n")
-        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
-        return 0
+        return _bench_out(args, res, post_report(res), "post.jsonl")
     if args.suite in ("mesh", "mpi"):
         from foamsilo.bench import bench_mesh, bench_mpi, mesh_report, mpi_report
 
@@ -810,26 +834,35 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--work-dir", help="keep the cases here")
 
     from foamsilo.analytic.cli import register
+    from foamsilo.hopper.cli import register as register_hopper
 
     def add_json(sp: Any) -> None:
         sp.add_argument("--json", action="store_true", help="one JSON object on stdout")
         sp.set_defaults(func=cmd_analytic)
 
     register(sub, add_json)
+    register_hopper(sub, add_json)
 
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
         "suite",
-        choices=["solver", "gas", "mesh", "mpi", "post", "report"],
+        choices=["solver", "gas", "mesh", "mpi", "post", "hopper", "report"],
         help="solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
         "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
         "1000000); mpi: speed-up over --ranks and the runner's overhead on a 3D silo "
         "(--cells: target cells, default 65000; --end-time default 0.02 s); post: cost of "
         "`foamsilo post` on a 3D silo of --cells (default 65000) with --times written times; "
+        "hopper: error against wall time of the DG hopper solver, k = 0, 1, 2 over --cells "
+        "(default 25 50 100 200 400), plot in --figure; "
         "report: tables from --log",
     )
     sp.add_argument("--ranks", nargs="+", default=["1", "2"], help="mpi: MPI rank counts")
     sp.add_argument("--times", type=int, default=100, help="post: written times")
+    sp.add_argument(
+        "--figure",
+        default="docs/hopper/hopper-work-precision.png",
+        help="hopper: the work-precision plot",
+    )
     sp.add_argument("-o", "--output", help="report: write the Markdown here")
     sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")
     sp.add_argument("--end-time", type=float, default=1.0, help="simulated time per run [s]")

@@ -23,7 +23,8 @@ def finish(fig: Any, axes: Any | Iterable[Any], path: Path, legend_size: float =
 
     for ax in axes if isinstance(axes, Iterable) else [axes]:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=legend_size)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=legend_size)
     fig.tight_layout()
     path = Path(path)
     tmp = path.with_name(path.stem + ".tmp.png")

@@ -157,10 +157,16 @@ def figures(args: argparse.Namespace) -> dict[str, Any]:
     return {"figures": [str(p) for p in all_figures(Path(args.output))]}
 
 
-def register(sub: Any, add_json: Callable[[Any], None]) -> None:
-    """Add the ``analytic`` command and its forms to the CLI."""
-    p = sub.add_parser("analytic", help="analytic laws and exact solutions (plain Python)",
-                       description="Analytic discharge laws and exact solutions.")  # fmt: skip
+Form = Callable[[str, Callable[[argparse.Namespace], dict[str, Any]], str], Any]
+
+
+def command_with_forms(sub: Any, name: str, help_: str, description: str,
+                       add_json: Callable[[Any], None]) -> Form:  # fmt: skip
+    """Add ``foamsilo NAME FORM ...``; return ``form(name, func, help)`` to add a form.
+
+    Each form's function returns the JSON payload (``cmd_analytic`` prints it).
+    """
+    p = sub.add_parser(name, help=help_, description=description)
     forms = p.add_subparsers(dest="form", required=True, metavar="FORM")
 
     def form(name: str, func: Callable[[argparse.Namespace], dict[str, Any]], help_: str) -> Any:
@@ -168,6 +174,14 @@ def register(sub: Any, add_json: Callable[[Any], None]) -> None:
         add_json(sp)
         sp.set_defaults(analytic=func)
         return sp
+
+    return form
+
+
+def register(sub: Any, add_json: Callable[[Any], None]) -> None:
+    """Add the ``analytic`` command and its forms to the CLI."""
+    form = command_with_forms(sub, "analytic", "analytic laws and exact solutions (plain Python)",
+                              "Analytic discharge laws and exact solutions.", add_json)  # fmt: skip
 
     def material(sp: Any, preset: bool = True) -> None:
         if preset:
