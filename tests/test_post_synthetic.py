@@ -100,3 +100,35 @@ def test_a_row_cut_short_by_a_kill_is_dropped(tmp_path):
     _, data = read_function_object(tmp_path, "orificeFlow")
     assert data[:, 0].tolist() == [0.1, 0.2]
     assert data[:, 1].tolist() == [1.5, 2.5]
+
+
+def test_a_kill_between_the_two_outputs_keeps_the_mass_balance(tmp_path):
+    """kill -9 after the flux row of t = 0.3 was written but before the volume's:
+    the restart goes on from 0.3; the series are merged on their common times
+    and the flux of the orphan step is carried into the next one."""
+    from foamsilo.post import read_discharge
+
+    scene = load_preset("zhou-planar")
+    depth = scene.mesh_fraction
+    pp = tmp_path / "postProcessing"
+    t = [0.1, 0.2, 0.3, 0.4, 0.5]
+    q = {0.1: 1.0, 0.2: 2.0, 0.3: 3.0, 0.4: 4.0, 0.5: 5.0}  # volume flux per step
+    v, vol = {}, 100.0
+    for ti in t:
+        vol -= q[ti] * 0.1
+        v[ti] = vol
+    for name, rows_old, rows_new, value in (
+        ("orificeFlow", [0.1, 0.2, 0.3], [0.4, 0.5], lambda x: f"{q[x]}\t0"),
+        ("granularVolume", [0.1, 0.2], [0.4, 0.5], lambda x: f"{v[x]}"),
+    ):
+        for start, rows in (("0", rows_old), ("0.3", rows_new)):
+            d = pp / name / start
+            d.mkdir(parents=True)
+            d.joinpath("f.dat").write_text(
+                "# Time\tx\n" + "".join(f"{r}\t{value(r)}\n" for r in rows)
+            )
+    d = read_discharge(tmp_path, scene)
+    assert d.time.tolist() == [0.1, 0.2, 0.4, 0.5]
+    # the step ending at 0.4 carries the outflow of 0.2-0.4: (3 + 4) * 0.1 over 0.2 s
+    assert d.volume_flux * depth == pytest.approx([1.0, 2.0, 3.5, 5.0])
+    assert d.mass_balance_error < 1e-12
