@@ -9,6 +9,7 @@ names the field and what is allowed).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
@@ -41,9 +42,15 @@ def _console() -> Any:
     return Console(stderr=False, highlight=False)
 
 
+#: Where --json output goes: the stdout of the call; everything else printed
+#: meanwhile (PyFoam, OpenFOAM utilities run in-process) goes to stderr
+_JSON_OUT: list[Any] = []
+
+
 def _emit(args: argparse.Namespace, payload: dict[str, Any], human: Callable[[], None]) -> None:
     if args.json:
-        sys.stdout.write(json.dumps(payload, indent=2, default=_json_default) + "\n")
+        out = _JSON_OUT[-1] if _JSON_OUT else sys.stdout
+        out.write(json.dumps(payload, indent=2, default=_json_default) + "\n")
     else:
         human()
 
@@ -572,6 +579,26 @@ def cmd_bench(args: argparse.Namespace) -> int:
             Path(args.output).write_text(text + "\n")
         _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
         return 0
+    if args.suite == "validation":
+        from foamsilo.suite import run_suite
+
+        with tempfile.TemporaryDirectory(prefix="foamsilo-suite-") as tmp:
+            work = Path(args.work_dir) if args.work_dir else Path(tmp)
+            res = run_suite(args.quick, Path(args.output or "docs/validation"), work,
+                            args.only or None, jobs=args.jobs)  # fmt: skip
+        failed = [c for c in res["checks"] if not c["passed"]]
+
+        def human_suite() -> None:
+            con = _console()
+            for c in res["checks"]:
+                mark = "pass" if c["passed"] else "FAIL"
+                con.print(f"{mark}  {c['entry']}: {c['name']} = {c['value']} "
+                          f"(allowed [{c['low']:g}, {c['high']:g}])")  # fmt: skip
+            stem = "suite-quick" if args.quick else "suite"
+            con.print(f"report: {args.output or 'docs/validation'}/{stem}.md")
+
+        _emit(args, {"ok": not failed, **res}, human_suite)
+        return 1 if failed else 0
     if args.suite == "hopper":
         from foamsilo.hopper.figures import (
             plot_work_precision,
@@ -846,8 +873,13 @@ def build_parser() -> argparse.ArgumentParser:
     sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
     sp.add_argument(
         "suite",
-        choices=["solver", "gas", "mesh", "mpi", "post", "hopper", "report"],
-        help="solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
+        nargs="?",
+        default="validation",
+        choices=["validation", "solver", "gas", "mesh", "mpi", "post", "hopper", "report"],
+        help="validation (default): the validation suite (error against run time, Beverloo "
+        "scaling, stiff and extreme cases; --quick: the reduced suite with its checks, exit 1 "
+        "when a figure leaves its tolerance; report in --output, default docs/validation); "
+        "solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
         "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
         "1000000); mpi: speed-up over --ranks and the runner's overhead on a 3D silo "
         "(--cells: target cells, default 65000; --end-time default 0.02 s); post: cost of "
@@ -858,6 +890,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sp.add_argument("--ranks", nargs="+", default=["1", "2"], help="mpi: MPI rank counts")
     sp.add_argument("--times", type=int, default=100, help="post: written times")
+    sp.add_argument("--quick", action="store_true", help="validation: the reduced suite")
+    sp.add_argument("--only", nargs="+", help="validation: these entries only")
+    sp.add_argument("--jobs", type=int, default=2, help="validation: cases run at once")
     sp.add_argument(
         "--figure",
         default="docs/hopper/hopper-work-precision.png",
@@ -888,6 +923,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``foamsilo`` console script."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if getattr(args, "json", False):
+        # one JSON object on stdout, nothing else: stray prints go to stderr
+        _JSON_OUT.append(sys.stdout)
+        try:
+            with contextlib.redirect_stdout(sys.stderr):
+                return _call(args)
+        finally:
+            _JSON_OUT.pop()
+    return _call(args)
+
+
+def _call(args: argparse.Namespace) -> int:
+    """Run the command; errors become exit codes (and a JSON error object with --json)."""
     try:
         return int(args.func(args))
     except KeyboardInterrupt:
@@ -898,9 +946,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             2 if isinstance(exc, SceneError) else 130 if isinstance(exc, RunInterruptedError) else 1
         )
         if getattr(args, "json", False):
-            sys.stdout.write(
-                json.dumps(_error_payload(exc), indent=2, default=_json_default) + "\n"
-            )
+            out = _JSON_OUT[-1] if _JSON_OUT else sys.stdout
+            out.write(json.dumps(_error_payload(exc), indent=2, default=_json_default) + "\n")
         else:
             sys.stderr.write(f"foamsilo: error: {exc}\n")
         return code

@@ -32,3 +32,16 @@ def finish(fig: Any, axes: Any | Iterable[Any], path: Path, legend_size: float =
     plt.close(fig)
     tmp.replace(path)
     return path
+
+
+def labelled_loglog(ax: Any, rows: list[dict[str, Any]], x: str, y: str, point: str,
+                    label: str) -> None:  # fmt: skip
+    """Draw a log-log work-precision line: ``rows[x]`` against 100 ``rows[y]`` (%).
+
+    Each point is labelled with ``rows[point]`` (its resolution).
+    """
+    xs = [r[x] for r in rows]
+    ys = [100 * r[y] for r in rows]
+    ax.loglog(xs, ys, "o-", label=label)
+    for xi, yi, r in zip(xs, ys, rows, strict=True):
+        ax.annotate(str(r[point]), (xi, yi), fontsize=6, xytext=(3, 3), textcoords="offset points")

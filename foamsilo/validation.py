@@ -337,6 +337,9 @@ def _run_outcome(args: tuple[str, str, list[str], str, float]) -> dict[str, Any]
             detail=s["steady_reason"] or "",
             Q=s["Q"],
             Q_std=s["Q_std"],
+            Q_dimensionless=s["Q_dimensionless"],
+            cells=s["cells"],
+            cpu_s=result.cpu_seconds,
             mass_balance=s["mass_balance_rel_error"],
             lost_through_top=s["lost_through_top_rel"],
         )

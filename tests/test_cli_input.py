@@ -47,3 +47,21 @@ def test_presets_json(capsys):
 def test_scene_reference_is_markdown(capsys):
     assert main(["scene-reference"]) == 0
     assert "| `orifice_width` | m |" in capsys.readouterr().out
+
+
+def test_json_mode_keeps_stray_prints_off_stdout(monkeypatch, capsys):
+    """PyFoam prints (e.g. "Killing PID ...") while a run is stopped; with --json
+    stdout must still hold exactly one JSON object."""
+
+    import foamsilo.cli as cli
+
+    def noisy(args):
+        print("Killing PID 12345")  # what PyFoam's FoamThread prints
+        cli._emit(args, {"ok": True, "x": 1}, lambda: None)
+        return 0
+
+    monkeypatch.setattr(cli, "cmd_presets", noisy)
+    assert cli.main(["presets", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out) == {"ok": True, "x": 1}
+    assert "Killing PID" in err

@@ -29,7 +29,7 @@ from foamsilo.hopper.radial import (
     radial_field,
 )
 from foamsilo.hopper.transition import solve_transition
-from foamsilo.plots import finish, subplots
+from foamsilo.plots import finish, labelled_loglog, subplots
 
 PAPER = Material.degrees(DELTA_PAPER, PHI_W_PAPER)
 #: tau at 95% of the way down from r0 (r = 0.05 r0)
@@ -310,20 +310,7 @@ def plot_work_precision(result: dict[str, Any], path: Path) -> Path:
             rows = [r for r in result["rows"] if r["dim"] == dim and r["k"] == k]
             if not rows:
                 continue
-            ax.loglog(
-                [r["wall_s"] for r in rows],
-                [100 * r["max_rel_error"] for r in rows],
-                "o-",
-                label=f"P{k}",
-            )
-            for r in rows:
-                ax.annotate(
-                    str(r["cells"]),
-                    (r["wall_s"], 100 * r["max_rel_error"]),
-                    fontsize=6,
-                    xytext=(3, 3),
-                    textcoords="offset points",
-                )
+            labelled_loglog(ax, rows, "wall_s", "max_rel_error", "cells", f"P{k}")
         ax.set_xlabel("wall time [s] (one core)")
         ax.set_ylabel("max difference to the radial field [%]")
         ax.set_title(
