@@ -732,6 +732,42 @@ def cmd_validate(args: argparse.Namespace) -> int:
     return 0
 
 
+def cli_reference_markdown() -> str:
+    """Return the command-line reference (Markdown), generated from the parser."""
+    import os
+
+    saved = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal: fix the width
+    try:
+        return _cli_reference(build_parser())
+    finally:
+        if saved is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = saved
+
+
+def _cli_reference(parser: argparse.ArgumentParser) -> str:
+    out = ["# Command-line reference", "", "Generated from `foamsilo/cli.py`: "
+           "`foamsilo cli-reference > docs/cli.md`.", ""]  # fmt: skip
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sp in sub.choices.items():
+        out += [f"## foamsilo {name}", "", "```text", sp.format_help().rstrip(), "```", ""]
+        nested = [a for a in sp._actions if isinstance(a, argparse._SubParsersAction)]
+        for group in nested:
+            for form, fp in group.choices.items():
+                out += [f"### foamsilo {name} {form}", "", "```text", fp.format_help().rstrip(),
+                        "```", ""]  # fmt: skip
+    return "\n".join(out)
+
+
+def cmd_cli_reference(args: argparse.Namespace) -> int:
+    """Print the command-line reference (Markdown)."""
+    text = cli_reference_markdown()
+    _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
+    return 0
+
+
 def cmd_scene_reference(args: argparse.Namespace) -> int:
     """Print the scene-file reference (Markdown)."""
     from foamsilo.scene import reference_markdown
@@ -845,6 +881,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--if-needed", action="store_true", help="only if the sources changed"
     )
     add("scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
+    add("cli-reference", cmd_cli_reference, "print this command-line reference (Markdown)")
 
     sp = add("validate", cmd_validate, "reproduce a seed paper's simulations (report in docs/)")
     sp.add_argument(

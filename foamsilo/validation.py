@@ -366,6 +366,10 @@ def _run_outcome(args: tuple[str, str, list[str], str, float]) -> dict[str, Any]
             dt_max=max(dts) if dts else None,
             dt_median=float(np.median(dts)) if dts else None,
         )
+        # the time-step history, thinned to at most 300 points
+        ok = [r for r in rows if r["delta_t"] not in ("", "nan")]
+        pick = ok[:: max(1, len(ok) // 300)]
+        out["dt_history"] = [[float(r["time"]), float(r["delta_t"])] for r in pick]
     out["end_time"] = scene.run.end_time
     out["thickness"] = scene.silo.thickness
     return out

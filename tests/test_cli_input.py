@@ -65,3 +65,14 @@ def test_json_mode_keeps_stray_prints_off_stdout(monkeypatch, capsys):
     out, err = capsys.readouterr()
     assert json.loads(out) == {"ok": True, "x": 1}
     assert "Killing PID" in err
+
+
+def test_committed_cli_reference_is_current():
+    from pathlib import Path
+
+    from foamsilo.cli import cli_reference_markdown
+
+    doc = Path(__file__).resolve().parent.parent / "docs" / "cli.md"
+    assert doc.read_text().strip() == cli_reference_markdown().strip(), (
+        "docs/cli.md is stale: foamsilo cli-reference > docs/cli.md"
+    )

@@ -218,3 +218,15 @@ def test_pressure_taps_reach_the_probes_and_roundtrip(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(to_toml(s.to_dict()))
     assert load_scene_file(path).gas.taps == (0.1, 0.2)
+
+
+def test_user_guide_example_scene_is_valid(tmp_path):
+    import re
+    from pathlib import Path
+
+    guide = (Path(__file__).resolve().parent.parent / "docs" / "index.md").read_text()
+    toml = re.search(r"```toml\n(.*?)```", guide, re.S).group(1)
+    (tmp_path / "s.toml").write_text(toml)
+    s = load_scene_file(tmp_path / "s.toml")
+    assert s.representation == "axisymmetric"  # auto: a centred cylinder needs no 3D mesh
+    assert s.gas.taps == (0.05, 0.1, 0.2)

@@ -1,0 +1,45 @@
+"""The validation suite's reductions, on exactly known numbers (the runs are `foamsilo bench`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from foamsilo.suite import _recommend, beverloo_fit, checks
+
+
+@pytest.mark.parametrize(("exponent", "C", "f"), [(2.5, 3871.0, 0.0062), (1.5, 1.135e4, 0.0025)])
+def test_beverloo_fit_recovers_c_and_f(exponent, C, f):
+    d = np.array([0.03, 0.045, 0.06, 0.09, 0.12])
+    fit = beverloo_fit(d, C * (d - f) ** exponent, exponent)
+    assert fit["C"] == pytest.approx(C, rel=1e-9)
+    assert fit["f"] == pytest.approx(f, rel=1e-9)
+    assert fit["R2"] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_recommended_resolution_is_the_coarsest_that_stays_within():
+    cells = [16, 24, 32, 48, 64]
+    err = [0.064, 0.019, 0.021, 0.008, 0.0]  # against the finest
+    assert _recommend(cells, err, 0.05) == 24
+    assert _recommend(cells, err, 0.02) == 48
+    assert _recommend(cells, err, 0.001) is None
+
+
+def test_checks_flag_a_figure_outside_its_tolerance():
+    rows = [
+        {"cells_across": n, "Q": q, "Q_dimensionless": qd}
+        for n, q, qd in ((36, 0.0254, 0.54), (48, 0.0277, 0.59), (72, 0.0299, 0.64))
+    ]
+    result = {
+        "work-precision": {
+            "zhou-planar": {"rows": [{"cells_across": 16, "Q_dimensionless": 0.12}]},
+            "zhou-cyl-bottom": {"rows": rows},
+        }
+    }
+    by_name = {c.name: c for c in checks(result)}
+    assert not by_name["planar 16 across: Q*"].passed  # 0.12 is outside 0.16 +- 15%
+    assert by_name["lab silo: Q rises with resolution"].passed
+    assert by_name["lab silo, 72 across, 0.3 s: Q [kg/s]"].passed
+    rows[-1]["Q"] = None  # a run that stopped has no rate: the check fails, not crashes
+    by_name = {c.name: c for c in checks(result)}
+    assert not by_name["lab silo: Q rises with resolution"].passed
