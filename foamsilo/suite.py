@@ -98,12 +98,12 @@ def work_precision(quick: bool, work: Path, jobs: int, limit: float) -> dict[str
             if quick
             else ["run.end_time=1.0", "run.write_interval=0.5"],
         ),
-        # the wedge of the lab silo needs steps under ~1 ms at these
-        # resolutions (the default cap 0.05 sqrt(L/g) = 3.9 ms diverges at
-        # 48 across once the step passes ~1.2 ms: see the extremes entry)
+        # the wedge of the lab silo needs steps under ~1 ms up to 72 across
+        # (the default cap 0.05 sqrt(L/g) = 3.9 ms diverges at 48 across once
+        # the step passes ~1.2 ms: see the extremes entry) and 0.5 ms at 96
         "zhou-cyl-bottom": (
             [36, 48, 72] if quick else [36, 48, 72, 96],
-            ["run.max_delta_t=0.001"]
+            ["run.max_delta_t=0.001" if quick else "run.max_delta_t=0.0005"]
             + (
                 ["run.end_time=0.3", "run.write_interval=0.15"]
                 if quick
@@ -155,7 +155,7 @@ def beverloo(quick: bool, work: Path, jobs: int, limit: float) -> dict[str, Any]
     venier_sets = [
         "run.max_delta_t=0.001",  # the 12 cm outlet diverges at 1 s with 2 ms (9 ms default)
         "mesh.cells_across=44" if quick else "mesh.cells_across=66",
-        "run.end_time=1.5" if quick else "run.end_time=2.5",
+        "run.end_time=1.0",  # 5.5 sqrt(L/g); the largest outlets diverge from ~1.1 s
         "run.write_interval=0.5",
     ]
     widths = [0.02, 0.025, 0.03] if quick else [0.015, 0.02, 0.025, 0.03, 0.035, 0.04]
@@ -278,12 +278,46 @@ def extremes(quick: bool, work: Path, jobs: int, limit: float) -> dict[str, Any]
         )
         for c in caps
     ]
-    # D/d = 5: grains of D/5 (the continuum knows no grain size but through I)
-    cases.append(("D/d = 5", "zhou-planar", [*base, "material.grain_diameter=0.005"]))
-    # a tall silo, H/L = 20, filled to 19.5 L
-    cases.append(
-        ("tall silo H/L = 20", "zhou-planar", [*base, "silo.height=2.0", "silo.fill_height=1.95"])
-    )
+    # D/d = 5: grains of D/5 (the continuum knows no grain size but through I);
+    # a tall silo, H/L = 20, filled to 19.5 L; each also with eta_max = 1e4
+    for label, sets in (
+        ("D/d = 5", ["material.grain_diameter=0.005"]),
+        ("tall silo H/L = 20", ["silo.height=2.0", "silo.fill_height=1.95"]),
+    ):
+        cases.append((label, "zhou-planar", [*base, *sets]))
+        if not quick:
+            cases.append(
+                (
+                    f"{label}, eta_max = 1e4",
+                    "zhou-planar",
+                    [*base, *sets, "material.viscosity_cap_scaled=1e4"],
+                )
+            )
+    if not quick:
+        # the finest grains at the largest air flow, in the lab cylinder
+        cases.append(
+            (
+                "lab silo, d = 124 um, Q_air = 50 L/min",
+                "zhou-cyl-bottom",
+                [
+                    "mesh.cells_across=48",
+                    "run.max_delta_t=0.001",
+                    "run.end_time=0.3",
+                    "run.write_interval=0.15",
+                    'gas.mode="injection"',
+                    "gas.q_air_lpm=50",
+                    "material.grain_diameter=124e-6",
+                ],
+            )
+        )
+        # industrial scale, 3D (eccentric outlet), coarse; free discharge (no feeder)
+        cases.append(
+            (
+                "Venier Test 2, D = 4.2 m, eccentric outlet, 3D",
+                "venier-test2",
+                ["mesh.cells_across=24", "run.end_time=5.0", "run.write_interval=2.5"],
+            )
+        )
     # where the axisymmetric lab silo breaks: 24 across (4 cells over the
     # orifice), and 48 across with the default step cap
     lab = ["run.end_time=0.1", "run.write_interval=0.1"]
