@@ -294,30 +294,25 @@ def extremes(quick: bool, work: Path, jobs: int, limit: float) -> dict[str, Any]
                 )
             )
     if not quick:
-        # the finest grains at the largest air flow, in the lab cylinder
-        cases.append(
-            (
-                "lab silo, d = 124 um, Q_air = 50 L/min",
-                "zhou-cyl-bottom",
-                [
-                    "mesh.cells_across=48",
-                    "run.max_delta_t=0.001",
-                    "run.end_time=0.3",
-                    "run.write_interval=0.15",
-                    'gas.mode="injection"',
-                    "gas.q_air_lpm=50",
-                    "material.grain_diameter=124e-6",
-                ],
-            )
-        )
+        lab_gas = [
+            "mesh.cells_across=48",
+            "run.max_delta_t=0.001",
+            "run.end_time=0.3",
+            "run.write_interval=0.15",
+            'gas.mode="injection"',
+            "gas.q_air_lpm=50",
+            "material.grain_diameter=124e-6",
+        ]
         # industrial scale, 3D (eccentric outlet), coarse; free discharge (no feeder)
-        cases.append(
-            (
-                "Venier Test 2, D = 4.2 m, eccentric outlet, 3D",
-                "venier-test2",
-                ["mesh.cells_across=24", "run.end_time=5.0", "run.write_interval=2.5"],
+        venier2 = ["mesh.cells_across=24", "run.end_time=5.0", "run.write_interval=2.5"]
+        for label, preset, sets in (
+            ("lab silo, d = 124 um, Q_air = 50 L/min", "zhou-cyl-bottom", lab_gas),
+            ("Venier Test 2, D = 4.2 m, eccentric outlet, 3D", "venier-test2", venier2),
+        ):
+            cases.append((label, preset, sets))
+            cases.append(
+                (f"{label}, eta_max = 1e4", preset, [*sets, "material.viscosity_cap_scaled=1e4"])
             )
-        )
     # where the axisymmetric lab silo breaks: 24 across (4 cells over the
     # orifice), and 48 across with the default step cap
     lab = ["run.end_time=0.1", "run.write_interval=0.1"]
