@@ -305,7 +305,15 @@ def extremes(quick: bool, work: Path, jobs: int, limit: float) -> dict[str, Any]
         ]
         # industrial scale, 3D (eccentric outlet), coarse; free discharge (no feeder)
         venier2 = ["mesh.cells_across=24", "run.end_time=5.0", "run.write_interval=2.5"]
+        closed = [
+            "mesh.cells_across=48",
+            "run.max_delta_t=0.001",
+            "run.end_time=0.6",
+            "run.write_interval=0.3",
+            'gas.mode="closed-top"',
+        ]
         for label, preset, sets in (
+            ("lab silo, d = 538 um, closed top (Q_air = 0)", "zhou-cyl-bottom", closed),
             ("lab silo, d = 124 um, Q_air = 50 L/min", "zhou-cyl-bottom", lab_gas),
             ("Venier Test 2, D = 4.2 m, eccentric outlet, 3D", "venier-test2", venier2),
         ):
