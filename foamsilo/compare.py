@@ -96,17 +96,36 @@ def open_top_law(scene: Scene, orifice_width: float | None = None) -> tuple[str,
     if scene.representation == "planar":
         return "beverloo-2d", float(beverloo_2d(D, scene.material.density, scene.gravity))
     if s.shape == "cylindrical" and s.orifice_position == "bottom" and s.eccentricity == 0.0:
-        from foamsilo.analytic.zhou import config, q0_bottom
-
-        c = config("cyl-bottom")
-        assert c.C0 is not None
-        q = q0_bottom(D, scene.material.grain_diameter, 1.0, scene.material.density, c.C0,
-                      c.alpha_D, c.beta, None, scene.gravity)  # fmt: skip
-        return "zhou-eq1", float(q)
+        return "zhou-eq1", zhou_eq1(scene, D)
     raise FoamsiloError(
         f"{scene.name}: no analytic open-top law for a {s.shape} silo "
         f"({scene.representation}, {s.orifice_position} orifice); laws exist for planar silos "
         "(2D Beverloo) and cylinders with a centred bottom orifice (Zhou eq. 1)"
+    )
+
+
+def zhou_eq1(scene: Scene, orifice_width: float) -> float:
+    """Zhou et al. eq. 1 with the Table I constants of the bottom-orifice cylinder [kg/s].
+
+    The phase density of the continuum is the bulk density phi_b rho_p (phi = 1).
+    """
+    from foamsilo.analytic.zhou import config, q0_bottom
+
+    c = config("cyl-bottom")
+    assert c.C0 is not None
+    m = scene.material
+    return float(
+        q0_bottom(
+            orifice_width,
+            m.grain_diameter,
+            1.0,
+            m.density,
+            c.C0,
+            c.alpha_D,
+            c.beta,
+            None,
+            scene.gravity,
+        )
     )
 
 
@@ -122,8 +141,11 @@ def eq23(scene: Scene, q0: float, q_air: float, A: float) -> float:
     s_o = D if scene.representation == "planar" else math.pi * D**2 / 4
     nv = A * scene.air.viscosity * q0 / (rho**2 * scene.permeability * g * s_o)
     ki = scene.inertial_permeability
-    ni = scene.air.density * scene.material.grain_diameter * q0**2 / (rho**3 * ki * g * s_o**2) \
-        if ki else 0.0  # fmt: skip
+    ni = (
+        scene.air.density * scene.material.grain_diameter * q0**2 / (rho**3 * ki * g * s_o**2)
+        if ki
+        else 0.0
+    )
     return float(q0 * reduced_flow_rate(rho * q_air / q0, nv, ni))
 
 
@@ -147,8 +169,14 @@ def _case_dirs(target: Path) -> tuple[str, list[Path]]:
 
 def _geometry_key(scene: Scene) -> tuple[Any, ...]:
     s = scene.silo
-    return (scene.representation, s.shape, s.width, s.orifice_width, scene.mesh.cells_across,
-            scene.material.grain_diameter)  # fmt: skip
+    return (
+        scene.representation,
+        s.shape,
+        s.width,
+        s.orifice_width,
+        scene.mesh.cells_across,
+        scene.material.grain_diameter,
+    )
 
 
 def compare(target: Path, write: bool = True) -> dict[str, Any]:
@@ -190,9 +218,17 @@ def compare(target: Path, write: bool = True) -> dict[str, Any]:
         except FoamsiloError as exc:
             skipped.append({"case": str(d), "reason": str(exc)})
             continue
-        common = dict(case=str(d), scene=sc.name, representation=sc.representation,
-                      cells_across=sc.mesh.cells_across, orifice_width=sc.silo.orifice_width,
-                      q_air=q_air, q=s["Q"], q_std=s["Q_std"], units=units)  # fmt: skip
+        common = dict(
+            case=str(d),
+            scene=sc.name,
+            representation=sc.representation,
+            cells_across=sc.mesh.cells_across,
+            orifice_width=sc.silo.orifice_width,
+            q_air=q_air,
+            q=s["Q"],
+            q_std=s["Q_std"],
+            units=units,
+        )
         scenes.append(sc)
         if not sc.gas_coupled:
             points.append(Point(law=law, q_law=q_open, rel_error=s["Q"] / q_open - 1, **common))
@@ -201,8 +237,9 @@ def compare(target: Path, write: bool = True) -> dict[str, Any]:
         q0, src = (sim_q0[key], "simulation (open top)") if key in sim_q0 else (q_open, law)
         q68, q1 = eq23(sc, q0, q_air, A_PAPER), eq23(sc, q0, q_air, 1.0)
         errs = {"rel_error": s["Q"] / q68 - 1, "rel_error_a1": s["Q"] / q1 - 1}
-        points.append(Point(law="eq23", q_law=q68, q_law_a1=q1, q0=q0, q0_source=src,
-                            **errs, **common))  # fmt: skip
+        points.append(
+            Point(law="eq23", q_law=q68, q_law_a1=q1, q0=q0, q0_source=src, **errs, **common)
+        )
     if not points:
         raise FoamsiloError(
             f"{target}: nothing to compare; "
@@ -241,8 +278,11 @@ def comparison_markdown(result: dict[str, Any]) -> str:
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for p in result["points"]:
-        a1 = (f"{p['q_law_a1']:.5g} | {p['rel_error_a1']:+.1%}" if p["q_law_a1"] is not None
-              else "- | -")  # fmt: skip
+        a1 = (
+            f"{p['q_law_a1']:.5g} | {p['rel_error_a1']:+.1%}"
+            if p["q_law_a1"] is not None
+            else "- | -"
+        )
         lines.append(
             f"| {Path(p['case']).name} | {p['orifice_width']:.4g} | {p['q_air']:.3g} "
             f"| {p['q']:.5g} ± {p['q_std']:.2g} {p['units']} | {_LAW_NAMES[p['law']]} "
@@ -272,20 +312,37 @@ def plot_comparison(points: list[Point], scenes: list[Scene], path: Path) -> Pat
             ds = np.array([p.orifice_width for p, _ in group])
             lo, hi = 0.6 * ds.min(), 1.25 * ds.max()
             dd = np.linspace(lo, hi, 100)
-            ax.plot(dd * 1e3, [open_top_law(sc0, x)[1] for x in dd], "k-",
-                    label=_LAW_NAMES[p0.law])  # fmt: skip
-            ax.errorbar(ds * 1e3, [p.q for p, _ in group], yerr=[p.q_std for p, _ in group],
-                        fmt="o", color="C3", capsize=3, label="siloFoam (steady Q)")  # fmt: skip
+            ax.plot(dd * 1e3, [open_top_law(sc0, x)[1] for x in dd], "k-", label=_LAW_NAMES[p0.law])
+            ax.errorbar(
+                ds * 1e3,
+                [p.q for p, _ in group],
+                yerr=[p.q_std for p, _ in group],
+                fmt="o",
+                color="C3",
+                capsize=3,
+                label="siloFoam (steady Q)",
+            )
             ax.set_xlabel("orifice width D [mm]")
         else:
             qa = np.array([p.q_air for p, _ in group])
             hi = 1.2 * max(qa.max(), 1e-12)
             xx = np.linspace(0.0, hi, 60)
             for A, style in ((1.0, "k--"), (A_PAPER, "r-")):
-                ax.plot(xx, [eq23(sc0, p0.q0 or 0.0, x, A) for x in xx], style,
-                        label=f"eq. 23, A = {A:g} (Q0: {p0.q0_source})")  # fmt: skip
-            ax.errorbar(qa, [p.q for p, _ in group], yerr=[p.q_std for p, _ in group], fmt="o",
-                        color="C3", capsize=3, label="siloFoam")  # fmt: skip
+                ax.plot(
+                    xx,
+                    [eq23(sc0, p0.q0 or 0.0, x, A) for x in xx],
+                    style,
+                    label=f"eq. 23, A = {A:g} (Q0: {p0.q0_source})",
+                )
+            ax.errorbar(
+                qa,
+                [p.q for p, _ in group],
+                yerr=[p.q_std for p, _ in group],
+                fmt="o",
+                color="C3",
+                capsize=3,
+                label="siloFoam",
+            )
             planar = sc0.representation == "planar"
             ax.set_xlabel("Q_air per unit depth [m^2/s]" if planar else "Q_air [m^3/s]")
         ax.set_ylabel(f"Q [{p0.units}]")

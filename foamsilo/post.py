@@ -401,23 +401,11 @@ def reference_rate(scene: Scene) -> dict[str, Any] | None:
         return None
     if s.orifice_position != "bottom":
         return None
-    from foamsilo.analytic.zhou import config, q0_bottom
+    from foamsilo.analytic.zhou import config
+    from foamsilo.compare import zhou_eq1
 
     c = config("cyl-bottom")
-    assert c.C0 is not None
-    q = float(
-        q0_bottom(
-            s.orifice_width,
-            scene.material.grain_diameter,
-            1.0,
-            scene.material.density,
-            c.C0,
-            c.alpha_D,
-            c.beta,
-            None,
-            scene.gravity,
-        )
-    )
+    q = zhou_eq1(scene, s.orifice_width)
     return {"Q": q, "label": f"Zhou et al. 2019 eq. 1, C0 = {c.C0}: {q * 1e3:.2f} g/s"}
 
 

@@ -74,32 +74,6 @@ def initial_state(field: RadialField, junction: Junction, theta: np.ndarray) -> 
     return np.stack([rr, rt])
 
 
-def initial_psi_max(
-    dim: Dim,
-    upper_deg: float,
-    lower_deg: float,
-    material: Material,
-    field: RadialField | None = None,
-    points: int = 801,
-) -> tuple[float, float]:
-    """Largest |psi| of the initial condition on Gamma_0 and where [rad, rad]."""
-    from foamsilo.hopper.radial import sokolovskii
-
-    f = field or radial_field(dim, upper_deg, material)
-    j = Junction(math.radians(upper_deg), math.radians(lower_deg))
-    th = np.linspace(0.0, j.lower, points)
-    rr, rt = initial_state(f, j, th)
-    s = material.s
-    alpha, beta, gamma = (1 + s * s) / (1 - s * s), 4 * s * s / (1 - s * s) ** 2, -4 / (1 - s * s)
-    disc = beta * rr * rr + gamma * rt * rt
-    if np.any(disc <= 0):
-        i = int(np.argmin(disc))
-        return math.inf, float(th[i])
-    psi = np.abs(sokolovskii(rr, rt, alpha * rr + np.sqrt(disc))[1])
-    i = int(np.argmax(psi))
-    return float(psi[i]), float(th[i])
-
-
 def solve_transition(
     dim: Dim,
     upper_deg: float,
