@@ -8,4 +8,4 @@ with the plain-Python cross-checks in :mod:`foamsilo.analytic` and
 :mod:`foamsilo.hopper`.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

@@ -1,34 +1,37 @@
 """The ``foamsilo`` command line.
 
-Every command takes ``--json``: a single JSON object on stdout and nothing
-else.  Without it the output is for people.  Exit status: 0 success,
-1 failure (or, for ``doctor``, something missing), 2 bad input (the message
-names the field and what is allowed).
+Every command takes ``--json``: a single strict JSON object on stdout (no
+NaN) and nothing else, on success and on error, argument errors included.
+Without it the output is for people. Exit status: 0 success, 1 failure (or,
+for ``doctor``, something missing), 2 bad input (the message names the field
+or option and what is allowed), 130 interrupted.
+
+Each command does its work through :mod:`foamsilo.pipeline` (cases) or the
+studies (:mod:`foamsilo.studies`); this module parses, prints and maps
+errors to exit codes.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import json
-import math
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+import traceback
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from foamsilo import __version__
 from foamsilo.errors import (
-    DivergenceError,
-    FoamError,
     FoamsiloError,
-    MeshError,
+    InputError,
     RunInterruptedError,
-    SceneError,
     ToolchainError,
+    UsageError,
 )
+from foamsilo.jsonio import dumps
 
 DEFAULT_RUNS_DIR = Path("runs")
 
@@ -36,10 +39,10 @@ DEFAULT_RUNS_DIR = Path("runs")
 # ----------------------------------------------------------------------------- output
 
 
-def _console() -> Any:
+def _console(stderr: bool = False) -> Any:
     from rich.console import Console
 
-    return Console(stderr=False, highlight=False)
+    return Console(stderr=stderr, highlight=False)
 
 
 #: Where --json output goes: the stdout of the call; everything else printed
@@ -47,63 +50,28 @@ def _console() -> Any:
 _JSON_OUT: list[Any] = []
 
 
-def _emit(args: argparse.Namespace, payload: dict[str, Any], human: Callable[[], None]) -> None:
-    if args.json:
+def _emit(args: argparse.Namespace, payload: dict[str, Any], human: Callable[[], object]) -> None:
+    if getattr(args, "json", False):
         out = _JSON_OUT[-1] if _JSON_OUT else sys.stdout
-        out.write(json.dumps(payload, indent=2, default=_json_default) + "\n")
+        out.write(dumps(payload) + "\n")
     else:
         human()
 
 
-def _json_default(o: Any) -> Any:
-    if isinstance(o, Path):
-        return str(o)
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    return str(o)
+def _say(args: argparse.Namespace) -> Callable[[str], None]:
+    """Messages for people on stderr (none under --json or --quiet)."""
+    if getattr(args, "json", False) or getattr(args, "quiet", False):
+        return lambda m: None
+    con = _console(stderr=True)
+    return lambda m: con.print(m, markup=False)
 
 
-def _error_payload(exc: BaseException) -> dict[str, Any]:
-    err: dict[str, Any] = {"type": type(exc).__name__, "message": str(exc)}
-    if isinstance(exc, SceneError):
-        err["field"] = exc.field
-    if isinstance(exc, ToolchainError):
-        err.update(component=exc.component, fix=exc.fix)
-    if isinstance(exc, FoamError):
-        err.update(command=exc.command, returncode=exc.returncode, output=exc.output[-4000:])
-    if isinstance(exc, DivergenceError):
-        err.update(
-            quantity=exc.quantity,
-            time=exc.time,
-            last_good_time=exc.last_good_time,
-            case_dir=str(exc.case_dir),
-        )
-    if isinstance(exc, RunInterruptedError):
-        err.update(time=exc.time, last_good_time=exc.last_good_time, case_dir=str(exc.case_dir))
-    if isinstance(exc, MeshError) and exc.geometry_file:
-        err["geometry_file"] = str(exc.geometry_file)
-    return {"ok": False, "error": err}
-
-
-# ----------------------------------------------------------------------------- helpers
-
-
-def _load(spec: str, overrides: list[str] | None) -> tuple[Any, str | None]:
-    """Scene from a preset or file; also the file text to copy into the case."""
-    from foamsilo.scene import load_scene
-
-    scene = load_scene(spec, overrides)
-    p = Path(spec)
-    text = None
-    if p.exists() and not overrides:
-        text = p.read_text()
-    return scene, text
-
-
-def _progress_printer(quiet: bool) -> tuple[Callable[..., None] | None, Callable[[], None]]:
-    """Make a progress callback on stderr (simulated time, dt, Courant, ETA)."""
-    if quiet or not sys.stderr.isatty():
-        return None, lambda: None
+@contextlib.contextmanager
+def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
+    """Return a progress bar on a terminal (simulated time, dt, Courant, ETA); None otherwise."""
+    if getattr(args, "json", False) or getattr(args, "quiet", False) or not sys.stderr.isatty():
+        yield None
+        return
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
@@ -137,35 +105,11 @@ def _progress_printer(quiet: bool) -> tuple[Callable[..., None] | None, Callable
             gco=s.granular_courant,
         )
 
-    def stop() -> None:
+    try:
+        yield update
+    finally:
         if state["task"] is not None:
             prog.stop()
-
-    return update, stop
-
-
-def _is_case_dir(p: Path) -> bool:
-    from foamsilo.case import METADATA_FILE
-
-    return (p / METADATA_FILE).exists()
-
-
-def _run_finished(case: Path) -> bool:
-    from foamsilo.run import _control_value, time_directories
-
-    times = time_directories(case)
-    if not times:
-        return False
-    end = _control_value(case, "endTime")
-    return float(times[-1]) >= end * (1 - 1e-9) and (case / "log.siloFoam").exists()
-
-
-def _run_started(case: Path) -> str | None:
-    """Latest complete time directory after 0 of an unfinished run, or None."""
-    from foamsilo.run import time_directories
-
-    later = [t for t in time_directories(case) if float(t) > 0]
-    return later[-1] if later else None
 
 
 # ----------------------------------------------------------------------------- commands
@@ -231,13 +175,12 @@ def cmd_doctor(args: argparse.Namespace) -> int:
             f"{ofr.get('version', '')} ({ofr.get('source', '')}) {ofr.get('bin', '')}",
         )
         if "headers" in report:
-            h = report["headers"]
+            h, s = report["headers"], report["solver"]
             t.add_row(
                 "headers + wmake",
                 "ok" if h["found"] else "[red]missing",
                 str(h["source_dir"] or ""),
             )
-            s = report["solver"]
             t.add_row(
                 "siloFoam build", "ok" if s["found"] else "[red]missing", str(s["executable"] or "")
             )
@@ -267,27 +210,33 @@ def cmd_presets(args: argparse.Namespace) -> int:
     def human() -> None:
         con = _console()
         for it in items:
-            con.print(f"[bold]{it['name']:<16}[/] {it['description']}")
+            con.print(f"[bold]{it['name']:<22}[/] {it['description']}")
 
     _emit(args, {"ok": True, "presets": items}, human)
     return 0
 
 
+def _scene_text(spec: str, overrides: list[str]) -> str | None:
+    from foamsilo.scene import is_scene_file
+
+    return Path(spec).read_text() if is_scene_file(spec) and not overrides else None
+
+
 def cmd_new(args: argparse.Namespace) -> int:
     """Write a case (dictionaries, mesh, initial fill)."""
     from foamsilo.case import create_case
+    from foamsilo.scene import load_scene
     from foamsilo.toolchain import find_openfoam
 
-    scene, text = _load(args.scene, args.set)
+    scene = load_scene(args.scene, args.set)
     case = create_case(
         scene,
         Path(args.output),
         find_openfoam(),
         overwrite=args.overwrite,
-        scene_text=text,
+        scene_text=_scene_text(args.scene, args.set),
         dump_geometry=args.dump_geometry,
     )
-    payload = {"ok": True, **case.as_dict()}
 
     def human() -> None:
         con = _console()
@@ -297,17 +246,19 @@ def cmd_new(args: argparse.Namespace) -> int:
         )
         con.print(f"run it: foamsilo run {case.path}")
 
-    _emit(args, payload, human)
+    _emit(args, {"ok": True, **case.as_dict()}, human)
     return 0
 
 
 def cmd_mesh(args: argparse.Namespace) -> int:
     """Mesh a scene and report checkMesh's verdict and figures."""
     from foamsilo.case import create_case
+    from foamsilo.scene import load_scene
     from foamsilo.toolchain import find_openfoam
 
-    scene, text = _load(args.scene, args.set)
+    scene = load_scene(args.scene, args.set)
     of = find_openfoam()
+    text = _scene_text(args.scene, args.set)
     if args.output:
         case = create_case(
             scene,
@@ -346,138 +297,131 @@ def cmd_build_solver(args: argparse.Namespace) -> int:
     """Build (or rebuild) siloFoam and the mu(I) library."""
     from foamsilo.solver import ensure_solver
 
-    con = _console()
-    log = None if args.json else (lambda m: con.print(m))
-    build = ensure_solver(force=not args.if_needed, log=log)
+    build = ensure_solver(force=not args.if_needed, log=_say(args))
     payload = {
         "ok": True,
         "executable": str(build.executable),
         "library": str(build.library),
         **build.info,
     }
-    _emit(args, payload, lambda: con.print(f"siloFoam: {build.executable}"))
+    _emit(args, payload, lambda: _console().print(f"siloFoam: {build.executable}"))
     return 0
 
 
-def _print_summary(summary: dict[str, Any], run: dict[str, Any] | None) -> None:
+def _print_summary(s: dict[str, Any]) -> None:
     from rich.table import Table
 
     con = _console()
     t = Table(
-        title=f"{summary['scene']} ({summary['representation']}, "
-        f"{summary['cells_across']} cells across L, {summary['cells']} cells)"
+        title=f"{s['scene']} ({s['representation']}, {s['cells_across']} cells across L, "
+        f"{s['cells']} cells)"
     )
     t.add_column("quantity")
     t.add_column("value", justify="right")
-    if summary["steady"]:
-        scale = summary["flow_rate_scale"]["name"]
-        t.add_row("steady Q", f"{summary['Q']:.5g} {summary['Q_units']}")
+    if s["steady"]:
+        scale = s["flow_rate_scale"]["name"]
+        t.add_row("steady Q", f"{s['Q']:.5g} {s['Q_units']}")
         t.add_row(
             f"Q/({scale}), orifice flux",
-            f"{summary['Q_dimensionless']:.4f} +- {summary['Q_std_dimensionless']:.4f}",
+            f"{s['Q_dimensionless']:.4f} +- {s['Q_std_dimensionless']:.4f}",
         )
-        t.add_row(f"Q/({scale}), volume decrease", f"{summary['Q_from_volume_dimensionless']:.4f}")
-        w = summary["steady_window_s"]
+        t.add_row(f"Q/({scale}), volume decrease", f"{s['Q_from_volume_dimensionless']:.4f}")
+        w = s["steady_window_s"]
         t.add_row("steady window", f"{w[0]:.3g} - {w[1]:.3g} s")
-        ref = summary.get("reference")
+        ref = s.get("reference")
         if ref and ref.get("rel_diff") is not None:
-            # planar: the paper's converged value and its spread; else an analytic law
             spread = f" +- {ref['spread']:.2f}" if "spread" in ref else ""
             t.add_row(
                 ref.get("source", "reference"),
                 f"{ref['Q_dimensionless']:.3f}{spread} ({ref['rel_diff']:+.1%})",
             )
-        bev = summary.get("beverloo_2d")
-        if bev:
+        bev = s.get("beverloo_2d")
+        if bev and bev.get("rel_diff") is not None:
             t.add_row(
                 f"2D Beverloo, C = {bev['C']:.2f}",
                 f"{bev['Q_dimensionless']:.4f} ({bev['rel_diff']:+.1%})",
             )
     else:
-        t.add_row("steady", f"[red]no[/]: {summary['steady_reason']}")
-    t.add_row("mass balance error", f"{summary['mass_balance_rel_error']:.1e}")
-    if run:
+        t.add_row("steady", f"[red]no[/]: {s['steady_reason']}")
+    t.add_row("mass balance error", f"{s['mass_balance_rel_error']:.1e}")
+    run = s.get("run")
+    if run and "wall_seconds" in run:
         t.add_row(
             "solver wall / CPU time",
             f"{run['wall_seconds']:.1f} s / {run['cpu_seconds']:.1f} s ({run['steps']} steps)",
         )
     con.print(t)
-    con.print(f"files: {summary['case_dir']}/discharge.csv, discharge.png, summary.json")
+    for w in s.get("warnings") or []:
+        con.print(f"[yellow]warning[/]: {w}")
+    con.print(f"files: {s['case_dir']}/discharge.csv, discharge.png, summary.json, report.md")
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """Create (if needed), run and post-process a case."""
-    from foamsilo.case import SCENE_FILE, create_case, read_metadata, scene_digest, write_whole
-    from foamsilo.post import summarize
-    from foamsilo.run import reconstruct, run_solver
-    from foamsilo.scene import load_scene_file
-    from foamsilo.solver import ensure_solver
-    from foamsilo.toolchain import find_openfoam
+    """Create (if needed), run and reduce a case."""
+    from foamsilo.case import is_case
+    from foamsilo.pipeline import CaseSpec, run_case
+    from foamsilo.scene import load_scene
 
     if args.np is not None and args.np < 1:
-        raise SceneError("--np", f"{args.np} ranks: must be >= 1")
+        raise UsageError("--np", f"{args.np} ranks; allowed: an integer >= 1")
     if args.hostfile is not None and not args.hostfile.is_file():
-        raise FoamsiloError(f"--hostfile {args.hostfile}: no such file")
-    of = find_openfoam()
-    spec = Path(args.scene)
-    con = _console()
-    say = (lambda m: None) if args.json or args.quiet else (lambda m: con.print(m))
-    if spec.is_dir() and _is_case_dir(spec):
-        if args.set:
-            raise SceneError("--set", "cannot change an existing case; make a new one")
-        case_dir = spec.resolve()
+        raise UsageError("--hostfile", f"{args.hostfile}: no such file")
+    if args.resume and args.rerun:
+        raise UsageError(
+            "--rerun",
+            "--resume goes on from the latest time, --rerun starts over: give one of them",
+        )
+    target = Path(args.scene)
+    if target.is_dir() and is_case(target) and not args.output:
+        spec = CaseSpec(target, None, tuple(args.set))
+    elif target.is_dir() and not target.suffix == ".toml" and not args.output:
+        raise UsageError(
+            "scene",
+            f"{target} is a directory but not a foamsilo case "
+            "(no foamsilo.json); give a preset, a scene file or a case",
+        )
     else:
-        scene, text = _load(args.scene, args.set)
-        case_dir = Path(args.output or DEFAULT_RUNS_DIR / scene.name).resolve()
-        reuse = False
-        replace = args.overwrite
-        if _is_case_dir(case_dir) and not args.overwrite:
-            if read_metadata(case_dir).get("scene_digest") != scene_digest(scene):
-                if not args.update:
-                    raise FoamsiloError(
-                        f"{case_dir} holds a case of a different scene "
-                        "(use --update to replace it, --overwrite, or another -o)"
-                    )
-                say(f"{case_dir} holds an older version of the scene: replacing it")
-                replace = True
-            else:
-                reuse = True
-        if not reuse:
-            say(f"writing case {case_dir}")
-            create_case(scene, case_dir, of, overwrite=replace, scene_text=text)
-        else:
-            say(f"using existing case {case_dir}")
-    run_info = None
-    if _run_finished(case_dir) and not args.rerun:
-        say("run already finished; post-processing")
-    else:
-        started = _run_started(case_dir)
-        if started and not (args.resume or args.rerun):
-            raise FoamsiloError(
-                f"{case_dir} holds an interrupted run (latest complete time {started} s): "
-                "--resume continues it, --overwrite starts over"
-            )
-        n_procs = args.np or load_scene_file(case_dir / SCENE_FILE).run.n_procs
-        build = ensure_solver(of=of, log=say)
-        if started:
-            say(f"resuming from t = {started} s")
-        update, stop = _progress_printer(args.quiet or args.json)
-        try:
-            result = run_solver(
-                case_dir, of, build, progress=update, n_procs=n_procs, hostfile=args.hostfile
-            )
-        finally:
-            stop()
-        if args.reconstruct and n_procs > 1:
-            say("reconstructing the processor directories")
-            reconstruct(case_dir, of)
-        run_info = result.as_dict()
-        write_whole(case_dir / "run.json", json.dumps(run_info, indent=2))
-    if run_info is None and (case_dir / "run.json").exists():
-        run_info = json.loads((case_dir / "run.json").read_text())
-    summary = summarize(case_dir, run_info)
-    _emit(args, {"ok": True, **summary}, lambda: _print_summary(summary, run_info))
+        scene = load_scene(args.scene, args.set)
+        spec = CaseSpec(
+            Path(args.output or DEFAULT_RUNS_DIR / scene.name), args.scene, tuple(args.set)
+        )
+    from dataclasses import replace
+
+    spec = replace(
+        spec,
+        n_procs=args.np,
+        hostfile=args.hostfile,
+        resume=args.resume,
+        rerun=args.rerun,
+        overwrite=args.overwrite,
+        update=args.update,
+        reconstruct=args.reconstruct,
+    )
+    with _progress(args) as progress:
+        summary = run_case(spec, progress=progress, say=_say(args))
+    s = summary.as_json()
+    _emit(args, {"ok": True, **s}, lambda: _print_summary(s))
     return 0
+
+
+def cmd_post(args: argparse.Namespace) -> int:
+    """Reduce a case: Q(t), steady Q, mass balance, fields, pictures, report."""
+    from foamsilo.pipeline import reduce
+
+    s = reduce(_case_dir(args.case)).as_json()
+    _emit(args, {"ok": True, **s}, lambda: _print_summary(s))
+    return 0
+
+
+def _case_dir(path: str) -> Path:
+    from foamsilo.case import is_case
+
+    p = Path(path)
+    if not p.exists():
+        raise UsageError("case", f"{p}: no such directory")
+    if not is_case(p):
+        raise UsageError("case", f"{p} is not a foamsilo case (no foamsilo.json)")
+    return p.resolve()
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -485,14 +429,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from foamsilo.sweep import load_sweep, run_sweep
 
     sweep = load_sweep(Path(args.sweep))
-    say = (lambda m: None) if args.json or args.quiet else (lambda m: _console().print(m))
-    rows = run_sweep(sweep, log=say)
+    rows = run_sweep(sweep, log=_say(args))
     failed = [r for r in rows if r["status"] != "ok"]
 
     def human() -> None:
         from rich.table import Table
 
-        # the columns that vary between cases
         keys = [
             k
             for k in (sweep.cases[0].overrides if sweep.cases else {})
@@ -502,8 +444,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         for k in ["case", *keys, "status", "Q", "Q_dimensionless"]:
             tab.add_column(k)
         for r in rows:
-            q = r.get("Q")
-            qd = r.get("Q_dimensionless")
+            q, qd = r.get("Q"), r.get("Q_dimensionless")
             tab.add_row(
                 str(r["case"]),
                 *[str(r.get(k)) for k in keys],
@@ -517,28 +458,17 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0 if not failed else 1
 
 
-def cmd_post(args: argparse.Namespace) -> int:
-    """Post-process a case: Q(t), steady Q, mass balance, plot."""
-    from foamsilo.post import summarize
-
-    case = Path(args.case).resolve()
-    run_info = None
-    if (case / "run.json").exists():
-        run_info = json.loads((case / "run.json").read_text())
-    summary = summarize(case, run_info)
-    _emit(args, {"ok": True, **summary}, lambda: _print_summary(summary, run_info))
-    return 0
-
-
 def cmd_compare(args: argparse.Namespace) -> int:
     """Set a case's or sweep's steady rates on the analytic curves."""
     from foamsilo.compare import compare
     from foamsilo.report import sweep_report
 
-    target = Path(args.target).resolve()
-    result = compare(target)
+    target = Path(args.target)
+    if not target.is_dir():
+        raise UsageError("target", f"{target}: no such directory")
+    result = compare(target.resolve())
     if result["kind"] == "sweep":
-        result["report"] = str(sweep_report(target))
+        result["report"] = str(sweep_report(target.resolve()))
 
     def human() -> None:
         con = _console()
@@ -550,140 +480,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
         for sk in result["skipped"]:
             con.print(f"{Path(sk['case']).name}: not compared ({sk['reason']})")
         con.print(f"rms {result['rms_rel_error']:.1%}; table and plot in {target}/compare.md")
-
-    _emit(args, {"ok": True, **result}, human)
-    return 0
-
-
-def _bench_out(args: argparse.Namespace, res: dict[str, Any], text: str, log_name: str) -> int:
-    """Append a benchmark's record to its log, write its table, print it."""
-    from foamsilo.bench import write_result
-
-    if args.log:
-        write_result(res, Path(args.log).with_name(log_name))
-    if args.output:
-        Path(args.output).write_text(text + "\n")
-    _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
-    return 0
-
-
-def cmd_bench(args: argparse.Namespace) -> int:
-    """Run a benchmark and append its result to the log in docs/."""
-    from foamsilo.bench import bench_solver, solver_table, write_result
-
-    if args.suite == "report":
-        from foamsilo.bench import read_log, solver_report
-
-        text = solver_report(read_log(Path(args.log)))
-        if args.output:
-            Path(args.output).write_text(text + "\n")
-        _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
-        return 0
-    if args.suite == "validation":
-        from foamsilo.suite import run_suite
-
-        with tempfile.TemporaryDirectory(prefix="foamsilo-suite-") as tmp:
-            work = Path(args.work_dir) if args.work_dir else Path(tmp)
-            res = run_suite(args.quick, Path(args.output or "docs/validation"), work,
-                            args.only or None, jobs=args.jobs)  # fmt: skip
-        failed = [c for c in res["checks"] if not c["passed"]]
-
-        def human_suite() -> None:
-            con = _console()
-            for c in res["checks"]:
-                mark = "pass" if c["passed"] else "FAIL"
-                con.print(f"{mark}  {c['entry']}: {c['name']} = {c['value']} "
-                          f"(allowed [{c['low']:g}, {c['high']:g}])")  # fmt: skip
-            stem = "suite-quick" if args.quick else "suite"
-            con.print(f"report: {args.output or 'docs/validation'}/{stem}.md")
-
-        _emit(args, {"ok": not failed, **res}, human_suite)
-        return 1 if failed else 0
-    if args.suite == "hopper":
-        from foamsilo.hopper.figures import (
-            plot_work_precision,
-            work_precision,
-            work_precision_markdown,
-        )
-
-        cells = (
-            (25, 50, 100, 200, 400) if args.cells == ["32", "64"] else tuple(map(int, args.cells))
-        )
-        res = work_precision(cells=cells)
-        from foamsilo.bench import _git_commit, machine_info
-
-        res["commit"], res["machine"] = _git_commit(), machine_info()
-        figure = Path(args.figure)
-        figure.parent.mkdir(parents=True, exist_ok=True)
-        plot_work_precision(res, figure)
-        return _bench_out(args, res, work_precision_markdown(res), "hopper.jsonl")
-    if args.suite == "post":
-        from foamsilo.bench import bench_post, post_report
-
-        default = args.cells == ["32", "64"]
-        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-            work = Path(args.work_dir) if args.work_dir else Path(tmp)
-            res = bench_post(65000 if default else int(args.cells[0]), args.times, work)
-        return _bench_out(args, res, post_report(res), "post.jsonl")
-    if args.suite in ("mesh", "mpi"):
-        from foamsilo.bench import bench_mesh, bench_mpi, mesh_report, mpi_report
-
-        default = args.cells == ["32", "64"]
-        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-            work = Path(args.work_dir) if args.work_dir else Path(tmp)
-            if args.suite == "mesh":
-                targets = [64800, 1000000] if default else [int(c) for c in args.cells]
-                res = bench_mesh(targets, work)
-            else:
-                end = args.end_time if args.end_time != 1.0 else 0.02
-                target = 65000 if default else int(args.cells[0])
-                res = bench_mpi([int(r) for r in args.ranks], target, end, work)
-        text = (mesh_report if args.suite == "mesh" else mpi_report)(res)
-        if args.log:
-            write_result(res, Path(args.log).with_name(f"{args.suite}.jsonl"))
-        if args.output:
-            Path(args.output).write_text(text + "\n")
-        _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
-        return 0
-    cells = [int(c) for c in args.cells]
-    if args.suite == "gas":
-        from foamsilo.bench import bench_gas
-
-        with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-            res = bench_gas(cells[0], args.end_time, Path(tmp))
-        if args.log:
-            write_result(res, Path(args.log).with_name("gas.jsonl"))
-
-        def human_gas() -> None:
-            con = _console()
-            for label, r in res["rows"].items():
-                con.print(f"{label:>40}: {r['ms_per_step']:.2f} ms/step ({r['steps']} steps), "
-                          f"ratio to dry {r['ratio_to_dry']:.2f}")  # fmt: skip
-
-        _emit(args, {"ok": True, **res}, human_gas)
-        return 0
-    with tempfile.TemporaryDirectory(prefix="foamsilo-bench-") as tmp:
-        work = Path(args.work_dir) if args.work_dir else Path(tmp)
-        result = bench_solver(
-            cells,
-            args.end_time,
-            work,
-            overrides=args.set,
-            reference=not args.no_reference,
-            keep=args.work_dir is not None,
-        )
-    result["label"] = args.label
-    if args.log:
-        write_result(result, Path(args.log))
-
-    def human() -> None:
-        con = _console()
-        m = result["machine"]
-        con.print(
-            f"solver benchmark ({args.label or 'current'}), {m['cpu']} x{m['cores']}, "
-            f"commit {result['commit']}, end time {args.end_time} s"
-        )
-        con.print(solver_table(result))
 
     _emit(args, {"ok": True, **result}, human)
     return 0
@@ -706,20 +502,49 @@ def cmd_analytic(args: argparse.Namespace) -> int:
     return 0
 
 
+def _row_printer(args: argparse.Namespace) -> Callable[[dict[str, Any]], None]:
+    say = _say(args)
+
+    def on_row(r: dict[str, Any]) -> None:
+        q = r.get("Q")
+        say(
+            f"{r['label']}: {r['outcome']}"
+            + (f", Q = {q:.5g}" if isinstance(q, float) else "")
+            + f" ({r['wall_s']:.0f} s)"
+        )
+
+    return on_row
+
+
+@contextlib.contextmanager
+def _work_dir(args: argparse.Namespace, prefix: str) -> Iterator[Path]:
+    if args.work_dir:
+        yield Path(args.work_dir)
+        return
+    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
+        yield Path(tmp)
+
+
 def cmd_validate(args: argparse.Namespace) -> int:
     """Reproduce a seed paper's simulations and write the report into docs/."""
-    from foamsilo.validation import gas_extremes, zhou_gas
+    from foamsilo.studies.gas import gas_extremes, zhou_gas
 
-    with tempfile.TemporaryDirectory(prefix="foamsilo-validate-") as tmp:
-        work = Path(args.work_dir) if args.work_dir else Path(tmp)
+    with _work_dir(args, "foamsilo-validate-") as work:
         if args.suite == "gas-extremes":
-            report = gas_extremes(args.cells, work, Path(args.output), jobs=args.jobs,
-                                  limit=args.time_limit)  # fmt: skip
-            _emit(args, {"ok": True, **report}, lambda: _console().print(
-                "\n".join(f"{r['label']}: {r['outcome']}" for r in report["rows"])))  # fmt: skip
+            report = gas_extremes(
+                args.cells, work, Path(args.output), jobs=args.jobs, limit=args.time_limit
+            )
+            _emit(
+                args,
+                {"ok": True, **report},
+                lambda: _console().print(
+                    "\n".join(f"{r['label']}: {r['outcome']}" for r in report["rows"])
+                ),
+            )
             return 0
-        report = zhou_gas(args.cells, work, Path(args.output), jobs=args.jobs,
-                          end_time=args.end_time)  # fmt: skip
+        report = zhou_gas(
+            args.cells, work, Path(args.output), jobs=args.jobs, end_time=args.end_time
+        )
 
     def human() -> None:
         _console().print(
@@ -730,6 +555,159 @@ def cmd_validate(args: argparse.Namespace) -> int:
 
     _emit(args, {"ok": True, **report}, human)
     return 0
+
+
+# ----------------------------------------------------------------------------- bench
+
+
+def _bench_log(args: argparse.Namespace, result: dict[str, Any], name: str) -> None:
+    from foamsilo.studies.bench import write_result
+
+    if args.log:
+        write_result(result, Path(args.log) / f"{name}.jsonl")
+
+
+def _bench_out(args: argparse.Namespace, res: dict[str, Any], text: str, name: str) -> int:
+    """Append a benchmark's record to its log, write its table, print it."""
+    _bench_log(args, res, name)
+    if args.output:
+        Path(args.output).write_text(text + "\n")
+    _emit(args, {"ok": True, **res}, lambda: sys.stdout.write(text + "\n"))
+    return 0
+
+
+def cmd_bench_validation(args: argparse.Namespace) -> int:
+    """Return the validation suite (checks with tolerances; exit 1 when one fails)."""
+    from foamsilo.studies.suite import run_suite
+
+    with _work_dir(args, "foamsilo-suite-") as work:
+        res = run_suite(
+            args.quick,
+            Path(args.output),
+            work,
+            args.only or None,
+            jobs=args.jobs,
+            limit=args.time_limit,
+            on_row=_row_printer(args),
+        )
+    failed = [c for c in res["checks"] if not c["passed"]]
+
+    def human() -> None:
+        con = _console()
+        for c in res["checks"]:
+            mark = "pass" if c["passed"] else "FAIL"
+            con.print(
+                f"{mark}  {c['entry']}: {c['name']} = {c['value']} "
+                f"(allowed [{c['low']:g}, {c['high']:g}])",
+                markup=False,
+            )
+        con.print(f"report: {args.output}/{'suite-quick' if args.quick else 'suite'}.md")
+
+    _emit(args, {"ok": not failed, **res}, human)
+    return 1 if failed else 0
+
+
+def cmd_bench_solver(args: argparse.Namespace) -> int:
+    """Cost and accuracy of the solver on the planar silo."""
+    from foamsilo.studies.bench import bench_solver, solver_table
+
+    with _work_dir(args, "foamsilo-bench-") as work:
+        result = bench_solver(
+            args.cells,
+            args.end_time,
+            work,
+            extra=args.set,
+            reference=not args.no_reference,
+            keep=args.work_dir is not None,
+        )
+    result["label"] = args.label
+    _bench_log(args, result, "solver")
+
+    def human() -> None:
+        m = result["machine"]
+        _console().print(
+            f"solver benchmark ({args.label or 'current'}), {m['cpu']} x{m['cores']}, "
+            f"commit {result['commit']}, end time {args.end_time} s"
+        )
+        _console().print(solver_table(result))
+
+    _emit(args, {"ok": True, **result}, human)
+    return 0
+
+
+def cmd_bench_gas(args: argparse.Namespace) -> int:
+    """Cost of the pore-pressure solve against the same scene dry."""
+    from foamsilo.studies.bench import bench_gas
+
+    with _work_dir(args, "foamsilo-bench-") as work:
+        res = bench_gas(args.cells, args.end_time, work)
+    _bench_log(args, res, "gas")
+
+    def human() -> None:
+        for label, r in res["rows"].items():
+            _console().print(
+                f"{label:>40}: {r['ms_per_step']:.2f} ms/step ({r['steps']} steps), "
+                f"ratio to dry {r['ratio_to_dry']:.2f}"
+            )
+
+    _emit(args, {"ok": True, **res}, human)
+    return 0
+
+
+def cmd_bench_mesh(args: argparse.Namespace) -> int:
+    """Meshing time and memory of a 3D cylinder."""
+    from foamsilo.studies.bench import bench_mesh, mesh_report
+
+    with _work_dir(args, "foamsilo-bench-") as work:
+        res = bench_mesh(args.cells, work)
+    return _bench_out(args, res, mesh_report(res), "mesh")
+
+
+def cmd_bench_mpi(args: argparse.Namespace) -> int:
+    """MPI speed-up and the runner's overhead on a 3D silo."""
+    from foamsilo.studies.bench import bench_mpi, mpi_report
+
+    with _work_dir(args, "foamsilo-bench-") as work:
+        res = bench_mpi(args.ranks, args.cells, args.end_time, work, repeats=args.repeats)
+    return _bench_out(args, res, mpi_report(res), "mpi")
+
+
+def cmd_bench_post(args: argparse.Namespace) -> int:
+    """Cost of `foamsilo post` on a 3D silo with many written times."""
+    from foamsilo.studies.bench import bench_post, post_report
+
+    with _work_dir(args, "foamsilo-bench-") as work:
+        res = bench_post(
+            args.cells, args.times, work, ranks=args.ranks, interval=args.write_interval
+        )
+    return _bench_out(args, res, post_report(res), "post")
+
+
+def cmd_bench_hopper(args: argparse.Namespace) -> int:
+    """Error against wall time of the DG hopper solver, k = 0, 1, 2."""
+    from foamsilo.hopper.figures import plot_work_precision, work_precision, work_precision_markdown
+    from foamsilo.studies.cases import git_commit, machine_info
+
+    res = work_precision(cells=tuple(args.cells))
+    res["commit"], res["machine"] = git_commit(), machine_info()
+    figure = Path(args.figure)
+    figure.parent.mkdir(parents=True, exist_ok=True)
+    plot_work_precision(res, figure)
+    return _bench_out(args, res, work_precision_markdown(res), "hopper")
+
+
+def cmd_bench_report(args: argparse.Namespace) -> int:
+    """Return the solver benchmark's tables, from its log."""
+    from foamsilo.studies.bench import read_log, solver_report
+
+    text = solver_report(read_log(Path(args.log) / "solver.jsonl"))
+    if args.output:
+        Path(args.output).write_text(text + "\n")
+    _emit(args, {"ok": True, "markdown": text}, lambda: sys.stdout.write(text + "\n"))
+    return 0
+
+
+# ----------------------------------------------------------------------------- references
 
 
 def cli_reference_markdown() -> str:
@@ -748,16 +726,26 @@ def cli_reference_markdown() -> str:
 
 
 def _cli_reference(parser: argparse.ArgumentParser) -> str:
-    out = ["# Command-line reference", "", "Generated from `foamsilo/cli.py`: "
-           "`foamsilo cli-reference > docs/cli.md`.", ""]  # fmt: skip
+    out = [
+        "# Command-line reference",
+        "",
+        "Generated from `foamsilo/cli.py`: `foamsilo cli-reference > docs/cli.md`.",
+        "",
+    ]
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     for name, sp in sub.choices.items():
         out += [f"## foamsilo {name}", "", "```text", sp.format_help().rstrip(), "```", ""]
         nested = [a for a in sp._actions if isinstance(a, argparse._SubParsersAction)]
         for group in nested:
             for form, fp in group.choices.items():
-                out += [f"### foamsilo {name} {form}", "", "```text", fp.format_help().rstrip(),
-                        "```", ""]  # fmt: skip
+                out += [
+                    f"### foamsilo {name} {form}",
+                    "",
+                    "```text",
+                    fp.format_help().rstrip(),
+                    "```",
+                    "",
+                ]
     return "\n".join(out)
 
 
@@ -780,17 +768,26 @@ def cmd_scene_reference(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- parser
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, with usage errors raised (so that --json can report them as JSON)."""
+
+    def error(self, message: str) -> NoReturn:
+        raise UsageError(self.prog, message)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser (also used to document the CLI)."""
-    p = argparse.ArgumentParser(
+    from foamsilo.studies.bench import defaults
+
+    p = _Parser(
         prog="foamsilo",
         description="OpenFOAM simulations of granular silo discharge, and their cross-checks.",
     )
     p.add_argument("--version", action="version", version=f"foamsilo {__version__}")
-    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=_Parser)
 
-    def add(name: str, func: Callable[[argparse.Namespace], int], help_: str) -> Any:
-        sp = sub.add_parser(name, help=help_, description=help_)
+    def add(parent: Any, name: str, func: Callable[[argparse.Namespace], int], help_: str) -> Any:
+        sp = parent.add_parser(name, help=help_, description=help_)
         sp.add_argument("--json", action="store_true", help="one JSON object on stdout")
         sp.set_defaults(func=func)
         return sp
@@ -805,13 +802,17 @@ def build_parser() -> argparse.ArgumentParser:
             help="override a scene value, e.g. mesh.cells_across=32 (repeatable)",
         )
 
-    add("doctor", cmd_doctor, "report what OpenFOAM, headers, solver, gmsh and MPI are found")
-    add("presets", cmd_presets, "list the named scenes of the papers")
+    add(sub, "doctor", cmd_doctor, "report what OpenFOAM, headers, solver, gmsh and MPI are found")
+    add(sub, "presets", cmd_presets, "list the named scenes of the papers")
 
-    sp = add("new", cmd_new, "write a ready-to-run case for a scene")
+    sp = add(sub, "new", cmd_new, "write a ready-to-run case for a scene")
     scene_args(sp)
     sp.add_argument("-o", "--output", required=True, help="case directory to write")
-    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing foamsilo case (never a directory that is not one)",
+    )
     sp.add_argument(
         "--dump-geometry",
         type=Path,
@@ -819,15 +820,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="also write the gmsh geometry (.geo_unrolled, .brep)",
     )
 
-    sp = add("mesh", cmd_mesh, "mesh a scene and report the checkMesh verdict")
+    sp = add(sub, "mesh", cmd_mesh, "mesh a scene and report the checkMesh verdict")
     scene_args(sp)
     sp.add_argument("-o", "--output", help="keep the meshed case here")
-    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument("--overwrite", action="store_true", help="replace an existing foamsilo case")
     sp.add_argument(
         "--dump-geometry", type=Path, metavar="FILE", help="write the gmsh geometry for inspection"
     )
 
-    sp = add("run", cmd_run, "run a scene (or a case directory) and post-process it")
+    sp = add(sub, "run", cmd_run, "run a scene (or a case directory) and reduce it")
     sp.add_argument("scene", help="preset name, scene TOML file, or case directory")
     sp.add_argument(
         "--set",
@@ -837,19 +838,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="override a scene value (repeatable)",
     )
     sp.add_argument("-o", "--output", help=f"case directory (default {DEFAULT_RUNS_DIR}/<name>)")
-    sp.add_argument("--overwrite", action="store_true", help="replace an existing case")
+    sp.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="write the case afresh (from the scene, or a case's own scene.toml)",
+    )
     sp.add_argument(
         "--update",
         action="store_true",
         help="replace the case if it holds another scene; reuse it if it holds this one",
     )
     sp.add_argument(
-        "--rerun", action="store_true", help="run the solver even if the case already finished"
+        "--rerun",
+        action="store_true",
+        help="run again from t = 0 (the results of earlier runs are removed)",
     )
     sp.add_argument(
         "--resume",
         action="store_true",
-        help="continue an interrupted run from its latest complete time directory",
+        help="continue an interrupted or failed run from its latest complete time",
     )
     sp.add_argument(
         "--np", type=int, default=None, help="MPI ranks (default: the scene's run.n_procs)"
@@ -865,30 +872,34 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="after a parallel run, merge the processor directories (reconstructPar)",
     )
-    sp.add_argument("--quiet", action="store_true", help="no progress bar")
+    sp.add_argument("--quiet", action="store_true", help="no progress bar, no messages")
 
-    sp = add("sweep", cmd_sweep, "run the cases of a sweep file under a CPU budget (resumable)")
+    sp = add(
+        sub, "sweep", cmd_sweep, "run the cases of a sweep file under a CPU budget (resumable)"
+    )
     sp.add_argument("sweep", help="sweep TOML file (see foamsilo/sweep.py for the format)")
     sp.add_argument("--quiet", action="store_true", help="no per-case messages")
 
-    sp = add("post", cmd_post, "post-process a case: Q(t), steady Q, fields, pictures, report")
+    sp = add(sub, "post", cmd_post, "reduce a case: Q(t), steady Q, fields, pictures, report")
     sp.add_argument("case", help="case directory")
 
-    sp = add("compare", cmd_compare, "simulation points on the analytic curves, with errors")
+    sp = add(sub, "compare", cmd_compare, "simulation points on the analytic curves, with errors")
     sp.add_argument("target", help="case directory, or a sweep's output directory")
 
-    add("build-solver", cmd_build_solver, "build siloFoam and its mu(I) library").add_argument(
+    add(sub, "build-solver", cmd_build_solver, "build siloFoam and its mu(I) library").add_argument(
         "--if-needed", action="store_true", help="only if the sources changed"
     )
-    add("scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
-    add("cli-reference", cmd_cli_reference, "print this command-line reference (Markdown)")
+    add(sub, "scene-reference", cmd_scene_reference, "print the scene-file reference (Markdown)")
+    add(sub, "cli-reference", cmd_cli_reference, "print this command-line reference (Markdown)")
 
-    sp = add("validate", cmd_validate, "reproduce a seed paper's simulations (report in docs/)")
+    sp = add(
+        sub, "validate", cmd_validate, "reproduce a seed paper's simulations (report in docs/)"
+    )
     sp.add_argument(
         "suite",
         choices=["zhou-gas", "gas-extremes"],
-        help="zhou-gas: Zhou et al. 2019 sec. III.B, Figs 4b-6b; gas-extremes: stiff and "
-        "extreme gas cases in the lab silo",
+        help="zhou-gas: Zhou et al. 2019 sec. III.B, Figs 4b-6b; gas-extremes: stiff "
+        "and extreme gas cases in the lab silo",
     )
     sp.add_argument("--time-limit", type=float, default=900.0, help="wall seconds per case")
     sp.add_argument("--cells", type=int, default=64, help="cells across L")
@@ -896,6 +907,7 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--end-time", type=float, help="simulated time per case [s]")
     sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
     sp.add_argument("--work-dir", help="keep the cases here")
+    sp.add_argument("--quiet", action="store_true", help="no per-case messages")
 
     from foamsilo.analytic.cli import register
     from foamsilo.hopper.cli import register as register_hopper
@@ -907,37 +919,42 @@ def build_parser() -> argparse.ArgumentParser:
     register(sub, add_json)
     register_hopper(sub, add_json)
 
-    sp = add("bench", cmd_bench, "run a benchmark (solver: cost and accuracy on the planar silo)")
-    sp.add_argument(
-        "suite",
-        nargs="?",
-        default="validation",
-        choices=["validation", "solver", "gas", "mesh", "mpi", "post", "hopper", "report"],
-        help="validation (default): the validation suite (error against run time, Beverloo "
-        "scaling, stiff and extreme cases; --quick: the reduced suite with its checks, exit 1 "
-        "when a figure leaves its tolerance; report in --output, default docs/validation); "
-        "solver: cost and accuracy; gas: pore-pressure cost against dry; mesh: meshing "
-        "time and memory of a 3D cylinder (--cells: target cell counts, default 64800 "
-        "1000000); mpi: speed-up over --ranks and the runner's overhead on a 3D silo "
-        "(--cells: target cells, default 65000; --end-time default 0.02 s); post: cost of "
-        "`foamsilo post` on a 3D silo of --cells (default 65000) with --times written times; "
-        "hopper: error against wall time of the DG hopper solver, k = 0, 1, 2 over --cells "
-        "(default 25 50 100 200 400), plot in --figure; "
-        "report: tables from --log",
+    bench = sub.add_parser(
+        "bench",
+        help="benchmarks and the validation suite",
+        description="Benchmarks (speed, memory, error against run time) and "
+        "the validation suite; results are written into docs/.",
     )
-    sp.add_argument("--ranks", nargs="+", default=["1", "2"], help="mpi: MPI rank counts")
-    sp.add_argument("--times", type=int, default=100, help="post: written times")
-    sp.add_argument("--quick", action="store_true", help="validation: the reduced suite")
-    sp.add_argument("--only", nargs="+", help="validation: these entries only")
-    sp.add_argument("--jobs", type=int, default=2, help="validation: cases run at once")
-    sp.add_argument(
-        "--figure",
-        default="docs/hopper/hopper-work-precision.png",
-        help="hopper: the work-precision plot",
+    forms = bench.add_subparsers(dest="suite", required=True, metavar="SUITE", parser_class=_Parser)
+
+    def logged(sp: Any, default_log: str = "docs/benchmarks") -> None:
+        sp.add_argument(
+            "--log",
+            default=default_log,
+            help="directory of the JSON-lines logs the result is appended to ('' for none)",
+        )
+        sp.add_argument("--work-dir", help="keep the cases here")
+        sp.add_argument("--quiet", action="store_true", help="no per-case messages")
+
+    sp = add(
+        forms,
+        "validation",
+        cmd_bench_validation,
+        "the validation suite: error against run time, Beverloo scaling, the gas-assisted "
+        "lab silo, stiff and extreme cases; checks with tolerances (exit 1 if one fails)",
     )
-    sp.add_argument("-o", "--output", help="report: write the Markdown here")
-    sp.add_argument("--cells", nargs="+", default=["32", "64"], help="cells across L")
-    sp.add_argument("--end-time", type=float, default=1.0, help="simulated time per run [s]")
+    sp.add_argument("--quick", action="store_true", help="the reduced suite (bash scripts/test)")
+    sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
+    sp.add_argument("--jobs", type=int, default=2, help="cases run at once")
+    sp.add_argument("--time-limit", type=float, default=900.0, help="wall seconds per case")
+    sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
+    sp.add_argument("--work-dir", help="keep the cases here")
+    sp.add_argument("--quiet", action="store_true", help="no per-case messages")
+
+    d = defaults("solver")
+    sp = add(forms, "solver", cmd_bench_solver, "cost and accuracy of the solver (planar silo)")
+    sp.add_argument("--cells", nargs="+", type=int, default=d["cells"], help="cells across L")
+    sp.add_argument("--end-time", type=float, default=d["end_time"], help="simulated time [s]")
     sp.add_argument(
         "--set",
         action="append",
@@ -946,48 +963,114 @@ def build_parser() -> argparse.ArgumentParser:
         help="scene override applied to every run (a lever to measure)",
     )
     sp.add_argument("--label", default="", help="name of this configuration in the log")
-    sp.add_argument(
-        "--log",
-        default="docs/benchmarks/solver.jsonl",
-        help="JSON-lines log the result is appended to ('' for none)",
-    )
     sp.add_argument("--no-reference", action="store_true", help="skip the interFoam reference")
-    sp.add_argument("--work-dir", help="keep the cases here")
+    logged(sp)
+
+    d = defaults("gas")
+    sp = add(forms, "gas", cmd_bench_gas, "cost of the pore-pressure solve against dry")
+    sp.add_argument("--cells", type=int, default=d["cells"], help="cells across L")
+    sp.add_argument("--end-time", type=float, default=d["end_time"], help="simulated time [s]")
+    logged(sp)
+
+    d = defaults("mesh")
+    sp = add(forms, "mesh", cmd_bench_mesh, "meshing time and memory of a 3D cylinder")
+    sp.add_argument("--cells", nargs="+", type=int, default=d["cells"], help="target cell counts")
+    sp.add_argument("-o", "--output", help="write the Markdown table here")
+    logged(sp)
+
+    d = defaults("mpi")
+    sp = add(forms, "mpi", cmd_bench_mpi, "MPI speed-up and the runner's overhead on a 3D silo")
+    sp.add_argument("--ranks", nargs="+", type=int, default=d["ranks"], help="MPI rank counts")
+    sp.add_argument("--cells", type=int, default=d["cells"], help="target cell count")
+    sp.add_argument("--end-time", type=float, default=d["end_time"], help="simulated time [s]")
+    sp.add_argument(
+        "--repeats",
+        type=int,
+        default=d["repeats"],
+        help="serial runs, direct and through the runner, alternated",
+    )
+    sp.add_argument("-o", "--output", help="write the Markdown tables here")
+    logged(sp)
+
+    d = defaults("post")
+    sp = add(forms, "post", cmd_bench_post, "cost of `foamsilo post` on a 3D silo")
+    sp.add_argument("--cells", type=int, default=d["cells"], help="target cell count")
+    sp.add_argument("--times", type=int, default=d["times"], help="written times")
+    sp.add_argument(
+        "--write-interval",
+        type=float,
+        default=d["write_interval"],
+        help="interval between written times [s]",
+    )
+    sp.add_argument("--ranks", type=int, default=d["ranks"], help="MPI ranks of the run")
+    sp.add_argument("-o", "--output", help="write the Markdown table here")
+    logged(sp)
+
+    d = defaults("hopper")
+    sp = add(forms, "hopper", cmd_bench_hopper, "error against wall time of the DG hopper solver")
+    sp.add_argument("--cells", nargs="+", type=int, default=d["cells"], help="cells N")
+    sp.add_argument("--figure", default=d["figure"], help="the work-precision plot")
+    sp.add_argument("-o", "--output", help="write the Markdown table here")
+    logged(sp)
+
+    sp = add(forms, "report", cmd_bench_report, "the solver benchmark's tables, from its log")
+    sp.add_argument("-o", "--output", help="write the Markdown here")
+    sp.add_argument("--log", default="docs/benchmarks", help="directory of the logs")
     return p
+
+
+# ----------------------------------------------------------------------------- main
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``foamsilo`` console script."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if getattr(args, "json", False):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    json_mode = "--json" in argv
+    if json_mode:
         # one JSON object on stdout, nothing else: stray prints go to stderr
         _JSON_OUT.append(sys.stdout)
         try:
             with contextlib.redirect_stdout(sys.stderr):
-                return _call(args)
+                return _call(argv, json_mode)
         finally:
             _JSON_OUT.pop()
-    return _call(args)
+    return _call(argv, json_mode)
 
 
-def _call(args: argparse.Namespace) -> int:
-    """Run the command; errors become exit codes (and a JSON error object with --json)."""
+def _report_error(exc: BaseException, json_mode: bool, internal: bool = False) -> None:
+    from foamsilo.pipeline import error_payload
+
+    if json_mode:
+        out = _JSON_OUT[-1] if _JSON_OUT else sys.stdout
+        out.write(dumps({"ok": False, "error": error_payload(exc)}) + "\n")
+    if internal:
+        traceback.print_exc(file=sys.stderr)
+    if not json_mode or internal:
+        sys.stderr.write(f"foamsilo: {'internal ' if internal else ''}error: {exc}\n")
+
+
+def _call(argv: list[str], json_mode: bool) -> int:
+    """Parse and run the command; every error becomes an exit code and a message (or JSON)."""
     try:
+        args = build_parser().parse_args(argv)
         return int(args.func(args))
+    except SystemExit as exc:  # --help and --version
+        return int(exc.code or 0)
     except KeyboardInterrupt:
-        sys.stderr.write("interrupted\n")
+        _report_error(FoamsiloError("interrupted (Ctrl-C)"), json_mode)
         return 130
     except FoamsiloError as exc:
-        code = (
-            2 if isinstance(exc, SceneError) else 130 if isinstance(exc, RunInterruptedError) else 1
-        )
-        if getattr(args, "json", False):
-            out = _JSON_OUT[-1] if _JSON_OUT else sys.stdout
-            out.write(json.dumps(_error_payload(exc), indent=2, default=_json_default) + "\n")
-        else:
-            sys.stderr.write(f"foamsilo: error: {exc}\n")
-        return code
+        _report_error(exc, json_mode)
+        if isinstance(exc, InputError):
+            return 2
+        return 130 if isinstance(exc, RunInterruptedError) else 1
+    except OSError as exc:  # a file or directory the system refused: say which
+        where = f" ({exc.filename})" if exc.filename else ""
+        _report_error(FoamsiloError(f"{exc.strerror or exc}{where}"), json_mode)
+        return 1
+    except Exception as exc:  # noqa: BLE001 -- a bug: still one JSON object, and the trace
+        _report_error(exc, json_mode, internal=True)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover

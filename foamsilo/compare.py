@@ -29,9 +29,16 @@ from typing import Any
 
 import numpy as np
 
-from foamsilo.analytic.beverloo import beverloo_2d, beverloo_2d_constant
+from foamsilo.analytic.beverloo import (
+    ZHOU_PLANAR_D_OVER_L,
+    ZHOU_PLANAR_Q,
+    ZHOU_PLANAR_Q_SPREAD,
+    beverloo_2d,
+    beverloo_2d_constant,
+)
 from foamsilo.case import SCENE_FILE, write_whole
 from foamsilo.errors import FoamsiloError
+from foamsilo.jsonio import dumps
 from foamsilo.scene import Scene, load_scene_file
 
 COMPARE_JSON = "compare.json"
@@ -81,6 +88,13 @@ class Point:
     rel_error_a1: float | None = None
     q0: float | None = None
     q0_source: str | None = None
+
+
+_LAW_NAMES = {
+    "beverloo-2d": f"2D Beverloo, C = {beverloo_2d_constant():.2f}",
+    "zhou-eq1": "Zhou et al. eq. 1 (Table I)",
+    "eq23": f"eq. 23, A = {A_PAPER}",
+}
 
 
 def open_top_law(scene: Scene, orifice_width: float | None = None) -> tuple[str, float]:
@@ -149,6 +163,98 @@ def eq23(scene: Scene, q0: float, q_air: float, A: float) -> float:
     return float(q0 * reduced_flow_rate(rho * q_air / q0, nv, ni))
 
 
+@dataclass(frozen=True)
+class Reference:
+    """A published or analytic rate a scene's steady Q is set against.
+
+    Attributes
+    ----------
+    key
+        ``zhou-planar`` (the converged continuum rate of Zhou sec. III.B),
+        ``beverloo-2d``, ``zhou-eq1`` or ``eq23``.
+    label
+        What a legend or a table says of it.
+    q
+        The rate [kg/s, or kg/(m s) planar].
+    spread
+        Half-width of its band, in the units of ``q`` (0: a line).
+    """
+
+    key: str
+    label: str
+    q: float
+    spread: float = 0.0
+
+
+def references(scene: Scene) -> list[Reference]:
+    """Return the rates that apply to a scene (what ``compare`` and the plots use).
+
+    Gas-coupled scenes: eq. 23 (A = 0.68, Q0 from the open-top law); open-top
+    planar scenes: the 2D Beverloo law, and Zhou's converged 0.16 for their
+    D = L/4 silo without wall friction; cylinders with a centred bottom
+    orifice: Zhou eq. 1. Other shapes have none.
+    """
+    try:
+        law, q_open = open_top_law(scene)
+    except FoamsiloError:
+        return []
+    planar = scene.representation == "planar"
+    if scene.gas_coupled:
+        q_air = scene.q_air_per_depth if planar else scene.q_air
+        q = eq23(scene, q_open, q_air, A_PAPER)
+        return [Reference("eq23", f"eq. 23, A = {A_PAPER}, Q0 from {_LAW_NAMES[law]}", q)]
+    if not planar:
+        from foamsilo.analytic.zhou import config
+
+        label = f"Zhou et al. 2019 eq. 1, C0 = {config('cyl-bottom').C0}: {q_open * 1e3:.2f} g/s"
+        return [Reference("zhou-eq1", label, q_open)]
+    scale = scene.rho_sqrt_gL3
+    out = []
+    d_over_l = scene.silo.orifice_width / scene.silo.width
+    if abs(d_over_l / ZHOU_PLANAR_D_OVER_L - 1) < 0.01 and not scene.wall_friction:
+        out.append(
+            Reference(
+                "zhou-planar",
+                f"Zhou et al. 2019, {ZHOU_PLANAR_Q:g} +- {ZHOU_PLANAR_Q_SPREAD:g}",
+                ZHOU_PLANAR_Q * scale,
+                ZHOU_PLANAR_Q_SPREAD * scale,
+            )
+        )
+    label = f"2D Beverloo, C = {beverloo_2d_constant():.2f}: {q_open / scale:.3f}"
+    out.append(Reference("beverloo-2d", label, q_open))
+    return out
+
+
+def reference_sections(scene: Scene, q: float | None) -> dict[str, Any]:
+    """Return the ``reference`` (and, planar, ``beverloo_2d``) sections of a run's summary."""
+    _, scale = scene.flow_rate_scale
+    out: dict[str, Any] = {}
+    for ref in references(scene):
+        rel = (q - ref.q) / ref.q if q is not None else None
+        if ref.key == "zhou-planar":
+            out["reference"] = {
+                "source": "Zhou et al. 2019, sec. III.B (open top), converged continuum rate",
+                "Q_dimensionless": ZHOU_PLANAR_Q,
+                "spread": ZHOU_PLANAR_Q_SPREAD,
+                "rel_diff": rel,
+            }
+        elif ref.key == "beverloo-2d":
+            out["beverloo_2d"] = {
+                "law": "Q = C rho sqrt(g) D^(3/2) (k = 0, continuum)",
+                "C": beverloo_2d_constant(),
+                "Q_dimensionless": ref.q / scale,
+                "rel_diff": rel,
+            }
+        else:
+            out["reference"] = {
+                "source": ref.label,
+                "Q": ref.q,
+                "Q_dimensionless": ref.q / scale,
+                "rel_diff": rel,
+            }
+    return out
+
+
 def _case_dirs(target: Path) -> tuple[str, list[Path]]:
     """``("case", [dir])`` or ``("sweep", [dirs])`` for a case or sweep directory."""
     if (target / SCENE_FILE).exists():
@@ -179,8 +285,52 @@ def _geometry_key(scene: Scene) -> tuple[Any, ...]:
     )
 
 
-def compare(target: Path, write: bool = True) -> dict[str, Any]:
-    """Compare the cases of a case or sweep directory with the analytic laws.
+@dataclass(frozen=True)
+class RunPoint:
+    """What compare needs of one reduced run."""
+
+    case: Path
+    scene: Scene
+    steady: bool
+    q: float | None
+    q_std: float | None
+    reason: str = ""
+
+
+def _load_points(dirs: list[Path]) -> tuple[list[RunPoint], list[dict[str, str]]]:
+    """Run points from the ``summary.json`` of each case directory."""
+    points, skipped = [], []
+    for d in dirs:
+        summary_file = d / "summary.json"
+        if not summary_file.exists():
+            skipped.append({"case": str(d), "reason": "not post-processed (no summary.json)"})
+            continue
+        try:
+            s = json.loads(summary_file.read_text())
+        except ValueError as exc:
+            skipped.append({"case": str(d), "reason": f"summary.json unreadable: {exc}"})
+            continue
+        points.append(
+            RunPoint(
+                d,
+                load_scene_file(d / SCENE_FILE),
+                bool(s.get("steady")),
+                s.get("Q"),
+                s.get("Q_std"),
+                s.get("steady_reason") or "not steady",
+            )
+        )
+    return points, skipped
+
+
+def compare_runs(
+    runs: list[RunPoint],
+    target: Path,
+    kind: str = "case",
+    skipped: list[dict[str, str]] | None = None,
+    write: bool = True,
+) -> dict[str, Any]:
+    """Set reduced runs on their analytic laws; write ``compare.*`` into ``target``.
 
     Returns
     -------
@@ -189,56 +339,63 @@ def compare(target: Path, write: bool = True) -> dict[str, Any]:
         (cases without a steady rate or a law, with the reason) and the error
         statistics; also written as ``compare.json``/``.md``/``.png`` when
         ``write``.
+
+    Raises
+    ------
+    FoamsiloError
+        Nothing to compare (no steady rate, or no law for the geometry).
     """
-    target = Path(target).resolve()
-    kind, dirs = _case_dirs(target)
-    loaded: list[tuple[Path, Scene, dict[str, Any]]] = []
-    skipped: list[dict[str, str]] = []
-    for d in dirs:
-        summary_file = d / "summary.json"
-        if not summary_file.exists():
-            skipped.append({"case": str(d), "reason": "not post-processed (no summary.json)"})
-            continue
-        summary = json.loads(summary_file.read_text())
-        if not summary.get("steady"):
-            reason = summary.get("steady_reason") or "not steady"
-            skipped.append({"case": str(d), "reason": reason})
-            continue
-        loaded.append((d, load_scene_file(d / SCENE_FILE), summary))
+    skipped = list(skipped or [])
+    loaded = []
+    for r in runs:
+        if not r.steady or r.q is None:
+            skipped.append({"case": str(r.case), "reason": r.reason or "not steady"})
+        else:
+            loaded.append(r)
     # simulated open-top rates, for eq. 23's Q0
-    sim_q0 = {_geometry_key(sc): s["Q"] for _, sc, s in loaded if not sc.gas_coupled}
+    sim_q0 = {_geometry_key(r.scene): float(r.q or 0.0) for r in loaded if not r.scene.gas_coupled}
     points: list[Point] = []
     scenes: list[Scene] = []
-    for d, sc, s in loaded:
+    for r in loaded:
+        sc = r.scene
+        assert r.q is not None
         planar = sc.representation == "planar"
         q_air = sc.q_air_per_depth if planar else sc.q_air
         units = "kg/(m s)" if planar else "kg/s"
         try:
             law, q_open = open_top_law(sc)
         except FoamsiloError as exc:
-            skipped.append({"case": str(d), "reason": str(exc)})
+            skipped.append({"case": str(r.case), "reason": str(exc)})
             continue
-        common = dict(
-            case=str(d),
+        common: dict[str, Any] = dict(
+            case=str(r.case),
             scene=sc.name,
             representation=sc.representation,
             cells_across=sc.mesh.cells_across,
             orifice_width=sc.silo.orifice_width,
             q_air=q_air,
-            q=s["Q"],
-            q_std=s["Q_std"],
+            q=r.q,
+            q_std=r.q_std or 0.0,
             units=units,
         )
         scenes.append(sc)
         if not sc.gas_coupled:
-            points.append(Point(law=law, q_law=q_open, rel_error=s["Q"] / q_open - 1, **common))
+            points.append(Point(law=law, q_law=q_open, rel_error=r.q / q_open - 1, **common))
             continue
         key = _geometry_key(sc)
         q0, src = (sim_q0[key], "simulation (open top)") if key in sim_q0 else (q_open, law)
         q68, q1 = eq23(sc, q0, q_air, A_PAPER), eq23(sc, q0, q_air, 1.0)
-        errs = {"rel_error": s["Q"] / q68 - 1, "rel_error_a1": s["Q"] / q1 - 1}
         points.append(
-            Point(law="eq23", q_law=q68, q_law_a1=q1, q0=q0, q0_source=src, **errs, **common)
+            Point(
+                law="eq23",
+                q_law=q68,
+                q_law_a1=q1,
+                q0=q0,
+                q0_source=src,
+                rel_error=r.q / q68 - 1,
+                rel_error_a1=r.q / q1 - 1,
+                **common,
+            )
         )
     if not points:
         raise FoamsiloError(
@@ -260,15 +417,19 @@ def compare(target: Path, write: bool = True) -> dict[str, Any]:
         result["files"] = [COMPARE_JSON, COMPARE_MD, COMPARE_PNG]
         plot_comparison(points, scenes, target / COMPARE_PNG)
         write_whole(target / COMPARE_MD, comparison_markdown(result))
-        write_whole(target / COMPARE_JSON, json.dumps(result, indent=2) + "\n")
+        write_whole(target / COMPARE_JSON, dumps(result) + "\n")
     return result
 
 
-_LAW_NAMES = {
-    "beverloo-2d": f"2D Beverloo, C = {beverloo_2d_constant():.2f}",
-    "zhou-eq1": "Zhou et al. eq. 1 (Table I)",
-    "eq23": f"eq. 23, A = {A_PAPER}",
-}
+def compare(target: Path, write: bool = True) -> dict[str, Any]:
+    """Compare the cases of a case or sweep directory with the analytic laws.
+
+    Reads each case's ``summary.json``; see :func:`compare_runs`.
+    """
+    target = Path(target).resolve()
+    kind, dirs = _case_dirs(target)
+    points, skipped = _load_points(dirs)
+    return compare_runs(points, target, kind, skipped, write)
 
 
 def comparison_markdown(result: dict[str, Any]) -> str:

@@ -14,7 +14,46 @@ class FoamsiloError(Exception):
     """Base class of all foamsilo errors."""
 
 
-class SceneError(FoamsiloError, ValueError):
+class InputError(FoamsiloError, ValueError):
+    """Bad input from the user: a scene value, an option, a path (exit status 2)."""
+
+
+class UsageError(InputError):
+    """A command-line option or path cannot be used.
+
+    Parameters
+    ----------
+    field
+        The option (``"--output"``, ``"--np"``) or argument it concerns.
+    message
+        What is wrong and what is allowed.
+    """
+
+    def __init__(self, field: str, message: str) -> None:
+        self.field = field
+        super().__init__(f"{field}: {message}")
+
+
+class CaseStateError(FoamsiloError):
+    """A case is not in a state the command can act on; the message says which one moves it.
+
+    Parameters
+    ----------
+    case_dir
+        The case.
+    state
+        What was found (``"running"``, ``"interrupted"``, ...).
+    message
+        What was found and the command that moves the case on.
+    """
+
+    def __init__(self, case_dir: Path, state: str, message: str) -> None:
+        self.case_dir = case_dir
+        self.state = state
+        super().__init__(message)
+
+
+class SceneError(InputError):
     """A scene value is missing, unknown or out of its allowed range.
 
     Parameters

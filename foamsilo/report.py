@@ -11,10 +11,13 @@ import json
 from pathlib import Path
 from typing import Any
 
-from foamsilo.case import SCENE_FILE, write_whole
-from foamsilo.scene import load_scene_file
+import numpy as np
+
+from foamsilo.case import write_whole
+from foamsilo.summary import RunSummary
 
 REPORT_MD = "report.md"
+DISCHARGE_PNG = "discharge.png"
 
 
 def _fmt(v: Any, spec: str = ".4g") -> str:
@@ -25,11 +28,50 @@ def _fmt(v: Any, spec: str = ".4g") -> str:
     return str(v)
 
 
-def case_report(case: Path, summary: dict[str, Any] | None = None) -> Path:
-    """Write ``report.md`` for a post-processed case and return its path."""
-    case = Path(case).resolve()
-    s = summary if summary is not None else json.loads((case / "summary.json").read_text())
-    scene = load_scene_file(case / SCENE_FILE)
+def plot_discharge(summary: RunSummary, path: Path) -> Path:
+    """Q against t/sqrt(L/g), with the steady window and the references that apply.
+
+    The references are the ones ``compare`` sets the case against
+    (:func:`foamsilo.compare.references`), drawn as a line or as a band.
+    """
+    from foamsilo.plots import finish, subplots
+
+    red = summary.reduction
+    d, st, scene = red.discharge, red.steady, red.scene
+    _, scale = scene.flow_rate_scale
+    planar = scene.representation == "planar"
+    T = scene.time_scale
+    fig, ax = subplots(size=(7, 4.2))
+    ax.plot(d.time / T, d.mass_flow / scale, lw=1.2, color="C0", label="simulation, orifice flux")
+    if st.steady:
+        ax.axvspan(st.t_start / T, st.t_end / T, color="C0", alpha=0.08, label="steady window")
+        ax.axhline(st.q / scale, color="C0", ls="--", lw=1, label=f"steady Q = {st.q / scale:.4f}")
+    for k, ref in enumerate(summary.references):
+        colour = f"C{k + 1}"
+        if ref.spread > 0:
+            ax.axhspan(
+                (ref.q - ref.spread) / scale,
+                (ref.q + ref.spread) / scale,
+                color=colour,
+                alpha=0.15,
+                label=ref.label,
+            )
+        else:
+            ax.axhline(ref.q / scale, color=colour, ls=":", lw=1.5, label=ref.label)
+    ax.set_xlabel(r"$t/\sqrt{L/g}$")
+    ax.set_ylabel(r"$Q/(\rho\sqrt{gL^3})$" if planar else r"$Q/(\rho\sqrt{g}D^{5/2})$")
+    ax.set_title(f"{scene.name}: {scene.mesh.cells_across} cells across L", fontsize=10)
+    top = max([float(np.max(d.mass_flow / scale))] + [r.q / scale for r in summary.references])
+    ax.set_ylim(0, 1.2 * top)
+    return finish(fig, ax, path)
+
+
+def case_report(summary: RunSummary) -> Path:
+    """Write ``discharge.png`` and ``report.md`` for a reduced case; return the report's path."""
+    case = summary.case
+    plot_discharge(summary, case / DISCHARGE_PNG)
+    s = summary.as_json()
+    scene = summary.reduction.scene
     sil, mat = scene.silo, scene.material
     run = s.get("run") or {}
     units = s.get("Q_units", "")
@@ -65,6 +107,8 @@ def case_report(case: Path, summary: dict[str, Any] | None = None) -> Path:
             out.append(f"* against {ref['source']}: {ref['rel_diff']:+.1%};")
     else:
         out.append(f"* **no steady regime**: {s.get('steady_reason')}")
+    for w in s.get("warnings") or []:
+        out.append(f"* **warning**: {w};")
     out += [
         f"* grains conserved to {s['mass_balance_rel_error']:.1e} of the initial volume.",
         "",

@@ -13,7 +13,6 @@ import fcntl
 import hashlib
 import json
 import shutil
-import subprocess
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -21,29 +20,22 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from foamsilo.errors import FoamError, ToolchainError
-from foamsilo.toolchain import OpenFOAM, cache_dir, find_openfoam, repo_root
+from foamsilo.process import run_command
+from foamsilo.resources import solver_source_dir
+from foamsilo.toolchain import OpenFOAM, cache_dir, find_openfoam
 
+#: Name of the solver application the cases run
 SOLVER_NAME = "siloFoam"
 LIB_NAME = "libfoamsiloViscosityModels.so"
 _IGNORED_PARTS = {"lnInclude", "__pycache__"}
-
-
-def solver_source_dir() -> Path:
-    """Return the ``solver_src/`` directory of the checkout."""
-    src = repo_root() / "solver_src"
-    if not (src / "Allwmake").exists():
-        raise ToolchainError(
-            "solver sources",
-            f"{src} not found (foamsilo must run from its checkout)",
-            "git clone the foamsilo repository and pip install -e it",
-        )
-    return src
+#: Python's marker of the data package, not a solver source
+_IGNORED_FILES = {"__init__.py"}
 
 
 def _source_files(src: Path) -> Iterator[Path]:
     for p in sorted(src.rglob("*")):
         rel = p.relative_to(src)
-        if not p.is_file() or _IGNORED_PARTS & set(rel.parts):
+        if not p.is_file() or _IGNORED_PARTS & set(rel.parts) or rel.name in _IGNORED_FILES:
             continue
         # wmake build products live in Make/<WM_OPTIONS>/
         if len(rel.parts) >= 3 and rel.parts[-3] == "Make" or rel.suffix in {".o", ".dep"}:
@@ -154,23 +146,23 @@ def ensure_solver(
         shutil.copytree(
             solver_source_dir(),
             build_src,
-            ignore=shutil.ignore_patterns("lnInclude", "linux64*", "*.o", "*.dep", "__pycache__"),
+            ignore=shutil.ignore_patterns(
+                "lnInclude", "linux64*", "*.o", "*.dep", "__pycache__", "__init__.py"
+            ),
         )
         (root / "bin").mkdir()
         (root / "lib").mkdir()
         say(f"building {SOLVER_NAME} against OpenFOAM {of.version} ({of.source}) in {root}")
         t0 = time.perf_counter()
-        proc = subprocess.run(
-            ["./Allwmake"], cwd=build_src, env=env, capture_output=True, text=True
-        )
-        (root / "build.log").write_text(proc.stdout + proc.stderr)
+        res = run_command(["./Allwmake"], cwd=build_src, env=env)
+        (root / "build.log").write_text(res.output)
         exe, lib = root / "bin" / SOLVER_NAME, root / "lib" / LIB_NAME
-        if proc.returncode != 0 or not exe.exists() or not lib.exists():
-            errors = [ln for ln in (proc.stdout + proc.stderr).splitlines() if "error" in ln]
+        if res.returncode != 0 or not exe.exists() or not lib.exists():
+            errors = [ln for ln in res.output.splitlines() if "error" in ln]
             raise FoamError(
                 "Allwmake (solver_src)",
-                proc.returncode or 1,
-                "\n".join(errors[-20:]) or proc.stderr[-4000:],
+                res.returncode or 1,
+                "\n".join(errors[-20:]) or res.output[-4000:],
                 build_src,
             )
         info = {

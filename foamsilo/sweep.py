@@ -17,12 +17,13 @@ A sweep file (TOML) names a base scene and the variations::
     [[cases]]                       # ... or (and) an explicit list of overrides
     "silo.orifice_width" = 0.035
 
-Each case runs as ``foamsilo run BASE -o DIR --set ... --resume --json`` in
-its own process, so the command line's rules hold per case: a finished case
-is only post-processed again, an interrupted one continues from its latest
-complete time directory, a fresh one is created. Every scene is validated
-before anything runs. The summary table (``summary.csv``, ``summary.json``)
-is written whole (temporary file, then rename) after every finished case.
+Each case runs through :func:`foamsilo.pipeline.run_many` (its own worker
+process, resumable): a finished case is only reduced again, an interrupted
+one continues from its latest complete time directory, a fresh one is
+created, a running one is left alone (and reported). Every scene is
+validated before anything runs. The summary table (``summary.csv``,
+``summary.json``) is written whole (temporary file, then rename) after every
+finished case.
 """
 
 from __future__ import annotations
@@ -30,23 +31,19 @@ from __future__ import annotations
 import csv
 import io
 import itertools
-import json
 import os
-import subprocess
-import sys
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
-
 from foamsilo.case import write_whole
+from foamsilo.compare import COMPARE_MD, compare
 from foamsilo.errors import FoamsiloError, SceneError
-from foamsilo.scene import load_scene
+from foamsilo.jsonio import dumps
+from foamsilo.pipeline import Budget, CaseSpec, Outcome, run_many
+from foamsilo.report import sweep_report
+from foamsilo.scene import format_override, load_scene, read_toml
 
 #: Reduced outputs copied from each case's summary into the table
 OUTPUT_KEYS = (
@@ -75,7 +72,7 @@ class SweepCase:
     @property
     def sets(self) -> list[str]:
         """The overrides as ``--set KEY=VALUE`` values."""
-        return [f"{k}={_toml_value(v)}" for k, v in self.overrides.items()]
+        return [format_override(k, v) for k, v in self.overrides.items()]
 
 
 @dataclass
@@ -91,17 +88,14 @@ class Sweep:
     cases: list[SweepCase]
 
     @property
+    def budget(self) -> Budget:
+        """The CPU budget its cases run under."""
+        return Budget(self.cpu_budget, self.ranks_per_case)
+
+    @property
     def cases_at_once(self) -> int:
         """How many cases run at the same time (cases x ranks <= budget)."""
-        return max(1, self.cpu_budget // self.ranks_per_case)
-
-
-def _toml_value(v: Any) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, str):
-        return "'" + v + "'"
-    return repr(v)
+        return self.budget.cases_at_once
 
 
 def _slug(overrides: dict[str, Any]) -> str:
@@ -120,10 +114,7 @@ def load_sweep(path: Path) -> Sweep:
         (``sweep.cpu_budget``, ``cases[2].silo.orifice_width``).
     """
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise SceneError("sweep", f"cannot read {path}: {exc}") from None
+    data = read_toml(path, "sweep")
     unknown = sorted(set(data) - _SWEEP_KEYS)
     if unknown:
         raise SceneError(f"sweep.{unknown[0]}", f"unknown key; allowed: {sorted(_SWEEP_KEYS)}")
@@ -168,36 +159,34 @@ def load_sweep(path: Path) -> Sweep:
     return Sweep(path, base, name, output, ranks, budget, cases)
 
 
-def _run_case(sweep: Sweep, case: SweepCase) -> dict[str, Any]:
-    """Run (or resume, or just post-process) one case in its own process."""
-    cmd = [sys.executable, "-m", "foamsilo.cli", "run", sweep.base, "-o", str(case.directory)]
-    for s in case.sets:
-        cmd += ["--set", s]
-    cmd += ["--update", "--resume", "--quiet", "--json", "--np", str(sweep.ranks_per_case)]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    try:
-        payload = json.loads(proc.stdout)
-    except json.JSONDecodeError:
-        payload = {"ok": False, "error": {"type": "crash", "message": proc.stderr[-2000:]}}
-    return payload
+def _spec(sweep: Sweep, case: SweepCase) -> CaseSpec:
+    """Return the pipeline's view of a sweep case: resumable, replaced when its scene changed."""
+    return CaseSpec(
+        case_dir=case.directory,
+        scene=sweep.base,
+        overrides=tuple(case.sets),
+        n_procs=sweep.ranks_per_case,
+        resume=True,
+        update=True,
+        label=case.directory.name,
+    )
 
 
-def _row(case: SweepCase, payload: dict[str, Any] | None) -> dict[str, Any]:
+def _row(case: SweepCase, outcome: Outcome | None) -> dict[str, Any]:
     row: dict[str, Any] = {"case": case.index, "directory": str(case.directory)}
     row.update(case.overrides)
-    if payload is None:
+    if outcome is None:
         row["status"] = "pending"
         return row
-    if payload.get("ok"):
+    if outcome.ok and outcome.summary is not None:
         row["status"] = "ok"
-        row.update({k: payload.get(k) for k in OUTPUT_KEYS})
-        run = payload.get("run") or {}
+        row.update({k: outcome.summary.get(k) for k in OUTPUT_KEYS})
+        run = outcome.summary.get("run") or {}
         row["wall_s"] = run.get("wall_seconds")
         row["cpu_s"] = run.get("cpu_seconds")
     else:
-        err = payload.get("error", {})
-        row["status"] = err.get("type", "error")
-        row["error"] = err.get("message", "")
+        row["status"] = outcome.status
+        row["error"] = (outcome.error or {}).get("message", "")
     return row
 
 
@@ -205,7 +194,7 @@ def write_summary(sweep: Sweep, rows: list[dict[str, Any]]) -> None:
     """``summary.json`` and ``summary.csv`` of the sweep, each written whole."""
     sweep.output.mkdir(parents=True, exist_ok=True)
     payload = {"sweep": str(sweep.path), "base": sweep.base, "cases": rows}
-    write_whole(sweep.output / "summary.json", json.dumps(payload, indent=2) + "\n")
+    write_whole(sweep.output / "summary.json", dumps(payload) + "\n")
     columns: list[str] = []
     for r in rows:
         columns += [k for k in r if k not in columns]
@@ -217,38 +206,39 @@ def write_summary(sweep: Sweep, rows: list[dict[str, Any]]) -> None:
     write_whole(sweep.output / "summary.csv", buf.getvalue())
 
 
-def run_sweep(sweep: Sweep, log: Any = None) -> list[dict[str, Any]]:
+def run_sweep(sweep: Sweep, log: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
     """Run every case of ``sweep`` under its CPU budget; return the summary rows."""
     say = log or (lambda m: None)
     sweep.output.mkdir(parents=True, exist_ok=True)
-    results: dict[int, dict[str, Any] | None] = {c.index: None for c in sweep.cases}
+    results: dict[int, Outcome | None] = {c.index: None for c in sweep.cases}
+    budget = sweep.budget
     say(
-        f"sweep {sweep.name}: {len(sweep.cases)} cases, {sweep.cases_at_once} at once x "
+        f"sweep {sweep.name}: {len(sweep.cases)} cases, {budget.cases_at_once} at once x "
         f"{sweep.ranks_per_case} rank(s) (budget {sweep.cpu_budget} cores)"
     )
     write_summary(sweep, [_row(c, None) for c in sweep.cases])  # all pending
-    with ThreadPoolExecutor(max_workers=sweep.cases_at_once) as pool:
-        futures = {pool.submit(_run_case, sweep, c): c for c in sweep.cases}
-        for fut in as_completed(futures):
-            case = futures[fut]
-            results[case.index] = fut.result()
-            rows = [_row(c, results[c.index]) for c in sweep.cases]
-            write_summary(sweep, rows)
-            r = rows[case.index]
-            say(f"case {case.index} ({case.directory.name}): {r['status']}")
+    by_dir = {c.directory: c for c in sweep.cases}
+
+    def done(outcome: Outcome) -> None:
+        case = by_dir[outcome.spec.case_dir]
+        results[case.index] = outcome
+        rows = [_row(c, results[c.index]) for c in sweep.cases]
+        write_summary(sweep, rows)
+        say(f"case {case.index} ({case.directory.name}): {rows[case.index]['status']}")
+
+    try:
+        run_many([_spec(sweep, c) for c in sweep.cases], budget, on_done=done)
+    finally:
+        write_summary(sweep, [_row(c, results[c.index]) for c in sweep.cases])
     rows = [_row(c, results[c.index]) for c in sweep.cases]
-    write_summary(sweep, rows)
     if all(r["status"] == "pending" for r in rows):
         raise FoamsiloError("no case ran")
     _compare_and_report(sweep.output, say)
     return rows
 
 
-def _compare_and_report(output: Path, say: Any) -> None:
+def _compare_and_report(output: Path, say: Callable[[str], None]) -> None:
     """Set the sweep's points on the analytic curves; write its ``report.md``."""
-    from foamsilo.compare import COMPARE_MD, compare
-    from foamsilo.report import sweep_report
-
     try:
         compare(output)
     except FoamsiloError as exc:

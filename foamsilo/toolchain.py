@@ -19,7 +19,6 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,11 +36,6 @@ HEADERS_READY = ".foamsilo-headers-ready"
 def cache_dir() -> Path:
     """Cache outside the clone: OpenFOAM sources and solver builds."""
     return Path(os.environ.get("FOAMSILO_CACHE", Path.home() / ".cache" / "foamsilo"))
-
-
-def repo_root() -> Path:
-    """Return the foamsilo checkout (holds ``templates/`` and ``solver_src/``)."""
-    return Path(__file__).resolve().parent.parent
 
 
 @dataclass(frozen=True)
@@ -206,15 +200,15 @@ def find_openfoam() -> OpenFOAM:
 
 def mpi_info() -> dict[str, str | None]:
     """Return the path and version of mpirun (None when missing)."""
+    from foamsilo.process import run_command
+
     path = shutil.which("mpirun")
     version = None
     if path:
         try:
-            out = subprocess.run(
-                [path, "--version"], capture_output=True, text=True, timeout=20
-            ).stdout
+            out = run_command([path, "--version"], env=dict(os.environ), timeout=20).output
             version = out.strip().splitlines()[0] if out.strip() else None
-        except (OSError, subprocess.SubprocessError):
+        except OSError:
             version = None
     return {"mpirun": path, "version": version}
 

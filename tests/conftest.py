@@ -38,16 +38,27 @@ def coarse_planar(**overrides: object) -> Scene:
 
 @pytest.fixture(scope="session")
 def planar_run(tmp_path_factory, openfoam, solver):
-    """One real run of the coarse planar silo, shared by the tests that read it."""
-    from foamsilo.case import create_case
-    from foamsilo.post import summarize
-    from foamsilo.run import run_solver
+    """One real run of the coarse planar silo through the pipeline, shared by the tests.
+
+    Returns the case directory and its summary (``summary.json``'s content).
+    """
+    from foamsilo.pipeline import CaseSpec, run_case
 
     case_dir = tmp_path_factory.mktemp("planar") / "zhou-planar-16"
-    case = create_case(coarse_planar(), case_dir, openfoam)
-    result = run_solver(case.path, openfoam, solver)
-    summary = summarize(case.path, result.as_dict())
-    return case, result, summary
+    sets = ("mesh.cells_across=16", "run.end_time=0.5", "run.write_interval=0.25")
+    summary = run_case(CaseSpec(case_dir, "zhou-planar", sets), of=openfoam)
+    return summary.case, summary.as_json()
+
+
+def frozen_flow_step(case: Path, dt: float, steps: int = 1) -> None:
+    """Set a case up for ``steps`` fixed steps of frozen flow, written in ASCII (PyFoam's parser)."""
+    from foamsilo.foam import edit_dict
+
+    with edit_dict(case / "system" / "controlDict") as cd:
+        cd.update(writeFormat="ascii", deltaT=dt, adjustTimeStep="no", endTime=steps * dt,
+                  writeControl="timeStep", writeInterval=steps)  # fmt: skip
+    with edit_dict(case / "system" / "fvSolution") as fs:
+        fs["PIMPLE"]["frozenFlow"] = "yes"
 
 
 def repo_root() -> Path:

@@ -249,23 +249,19 @@ DRY_PAIR = [
 
 @pytest.mark.openfoam
 def test_axisymmetric_and_3d_dry_runs_give_the_same_rate(tmp_path, capsys, openfoam, solver):
-    from foamsilo.case import create_case
     from foamsilo.cli import main
-    from foamsilo.post import summarize
-    from foamsilo.run import run_solver
+    from foamsilo.pipeline import CaseSpec, run_case
 
     rates, cpu = {}, {}
     for rep in ("axisymmetric", "3d"):
-        scene = load_preset("zhou-cyl-bottom", [*DRY_PAIR, f"mesh.representation='{rep}'"])
-        case = create_case(scene, tmp_path / rep, openfoam)
-        result = run_solver(case.path, openfoam, solver)
-        summary = summarize(case.path, result.as_dict())
+        sets = (*DRY_PAIR, f"mesh.representation='{rep}'")
+        summary = run_case(CaseSpec(tmp_path / rep, "zhou-cyl-bottom", sets), of=openfoam).as_json()
         assert summary["steady"], summary["steady_reason"]
         # the two independent estimates of each run agree (2%, as for the planar silo)
         assert summary["Q_from_volume"] == pytest.approx(summary["Q"], rel=0.02)
-        rates[rep], cpu[rep] = summary["Q"], result.cpu_seconds
+        rates[rep], cpu[rep] = summary["Q"], summary["run"]["cpu_seconds"]
         # the human summary of a non-planar case (scaled by rho sqrt(g) D^2.5)
-        assert main(["post", str(case.path)]) == 0
+        assert main(["post", str(tmp_path / rep)]) == 0
         assert "D^(5/2)" in capsys.readouterr().out
     assert rates["3d"] == pytest.approx(rates["axisymmetric"], rel=0.05)
     # the wedge is the cheap one (measured ratio ~40)

@@ -1,48 +1,78 @@
-"""Planar silo mesh layout (pure geometry, no gmsh run)."""
+"""Mesh layout (pure geometry, no gmsh run): rows, blocks and their patches."""
 
 from __future__ import annotations
 
 import pytest
 
-from foamsilo.mesh import PlanarSilo
+from foamsilo.mesh import profile_layout, slot_divisions, top_cell_ratio, vertical_rows
+from foamsilo.scene import load_preset
+
+
+def planar(n: int, **sets: object):
+    return load_preset(
+        "zhou-planar", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
+    )
 
 
 def test_uniform_mesh_counts():
-    g = PlanarSilo(0.1, 0.4, 0.025, 64)
-    assert g.divisions == (24, 16, 24)
-    assert g.cells_high == 256 and g.n_cells == 64 * 256
-    assert not g.graded and g.thickness == pytest.approx(0.1 / 64)
+    scene = planar(64, **{"mesh.top_cell_ratio": 1.0})
+    assert slot_divisions(0.1, 0.025, 64) == (24, 16, 24)
+    rows = vertical_rows(scene)
+    assert len(rows) == 1 and rows[0].n == 256 and rows[0].ratio == 1.0
+    assert profile_layout(scene).n_cells == 64 * 256
 
 
 def test_orifice_divisions_stay_symmetric():
     # D/dx = 5.2 cells: rounded to keep the mesh symmetric about the axis
-    g = PlanarSilo(0.1, 0.4, 0.026, 20)
-    left, orifice, right = g.divisions
+    left, orifice, right = slot_divisions(0.1, 0.026, 20)
     assert left == right and left + orifice + right == 20
 
 
 @pytest.mark.parametrize("ratio", [2.0, 3.0, 5.0])
 def test_graded_mesh_fills_the_height_with_the_requested_ratio(ratio):
-    g = PlanarSilo(0.1, 0.4, 0.025, 64, top_cell_ratio=ratio)
+    # a low fill leaves room for the full ratio in the headspace
+    scene = planar(64, **{"mesh.top_cell_ratio": ratio, "silo.fill_height": 0.2})
     dx = 0.1 / 64
-    n, r = g.grading
-    assert g.fine_top == pytest.approx(0.1)  # default: square cells up to one width
+    fine, graded = vertical_rows(scene)
+    assert fine.y1 == pytest.approx(0.1)  # default: square cells up to one width
+    heights = [dx * graded.ratio**k for k in range(graded.n)]
     # cell heights dx r^k, k = 0..n-1, fill the rest of the height ...
-    heights = [dx * r**k for k in range(n)]
-    assert sum(heights) == pytest.approx(0.4 - g.fine_top, rel=0.03)
+    assert sum(heights) == pytest.approx(0.4 - fine.y1, rel=0.03)
     # ... and the last one is ratio cell widths high
     assert heights[-1] / dx == pytest.approx(ratio)
-    assert g.n_cells < 64 * 256
+    assert profile_layout(scene).n_cells < 64 * 256
 
 
 def test_grading_keeps_grains_out_of_the_top_row():
     """The top cells may not be taller than half the gap above the fill."""
     for n in (16, 32, 64, 128):
-        g = PlanarSilo(0.1, 0.4, 0.025, n, top_cell_ratio=3.0, fill_height=0.39)
-        if g.graded:
-            top_cell = 0.1 / n * g.effective_top_cell_ratio
-            assert top_cell <= (0.4 - 0.39) / PlanarSilo.HEADSPACE_CELLS + 1e-12
+        scene = planar(n)
+        ratio = top_cell_ratio(scene)
+        if ratio > 1.0:
+            assert 0.1 / n * ratio <= (0.4 - 0.39) / 2 + 1e-12
     # 16 across: no room in a 10 mm headspace, the mesh stays uniform
-    assert not PlanarSilo(0.1, 0.4, 0.025, 16, 3.0, None, 0.39).graded
+    assert top_cell_ratio(planar(16)) == 1.0
     # 128 across: the full ratio fits
-    assert PlanarSilo(0.1, 0.4, 0.025, 128, 3.0, None, 0.39).effective_top_cell_ratio == 3.0
+    assert top_cell_ratio(planar(128)) == 3.0
+
+
+def test_blocks_carry_their_patches():
+    """The planar slot: orifice under the middle column, walls beside, atmosphere on top."""
+    layout = profile_layout(planar(16))
+    bottoms = [b.sides[0] for b in layout.blocks if b.corners[0][1] == 0.0]
+    assert bottoms == ["walls", "orifice", "walls"]
+    tops = {b.sides[2] for b in layout.blocks if b.corners[2][1] == pytest.approx(0.4)}
+    assert tops == {"atmosphere"}
+    inner = [b.sides[1] for b in layout.blocks[:-1] if b.corners[1][0] < 0.1]
+    assert set(inner) == {None}  # sides between blocks are inside the silo
+
+
+def test_wedge_axis_and_lateral_orifice_sides():
+    wedge = profile_layout(load_preset("zhou-cyl-bottom", ["mesh.cells_across=24"]))
+    assert {b.sides[3] for b in wedge.blocks if b.corners[0][0] == 0.0} == {"axis"}
+    lateral = profile_layout(load_preset("zhou-rect-lateral"))
+    right = [(b.corners[1][1], b.corners[2][1], b.sides[1]) for b in lateral.blocks]
+    s = load_preset("zhou-rect-lateral").silo
+    for y0, y1, side in right:
+        inside = y0 >= s.orifice_height - 1e-12 and y1 <= s.orifice_height + s.orifice_width + 1e-12
+        assert side == ("orifice" if inside else "walls")

@@ -141,4 +141,4 @@ def test_case_of_another_scene_is_not_overwritten(cli_run, capsys):
     case, _ = cli_run
     code = main(["run", "zhou-planar", "-o", str(case), "--json", "--set", "mesh.cells_across=32"])
     assert code == 1
-    assert "different scene" in json.loads(capsys.readouterr().out)["error"]["message"]
+    assert "another scene" in json.loads(capsys.readouterr().out)["error"]["message"]

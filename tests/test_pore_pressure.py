@@ -14,7 +14,6 @@ import contextlib
 import io
 import json
 import math
-import re
 import shutil
 from pathlib import Path
 
@@ -22,10 +21,12 @@ import numpy as np
 import pytest
 
 from foamsilo.analytic.exact import darcy_slit_pressure
-from foamsilo.case import create_case
+from foamsilo.case import create_case, time_directories
 from foamsilo.cli import main
-from foamsilo.foam import read_internal_field, run_utility, write_internal_field
+from foamsilo.foam import edit_dict, read_internal_field, run_utility, write_internal_field
 from foamsilo.scene import load_preset
+
+from .conftest import frozen_flow_step
 
 pytestmark = pytest.mark.openfoam
 
@@ -40,15 +41,6 @@ def cli(*args: str) -> tuple[int, dict]:
     return code, json.loads(buf.getvalue())
 
 
-def _set(path, key, value):
-    text = path.read_text()
-    text, n = re.subn(
-        r"^(\s*" + re.escape(key) + r"\s+)[^;]+;", r"\g<1>" + value + ";", text, count=1, flags=re.M
-    )
-    assert n == 1, key
-    path.write_text(text)
-
-
 def frozen_pore_pressure(tmp_path, openfoam, solver, cells, steps=1, inertial=False):
     scene = load_preset(
         "zhou-planar",
@@ -57,31 +49,17 @@ def frozen_pore_pressure(tmp_path, openfoam, solver, cells, steps=1, inertial=Fa
          "gas.permeability_scaled=1", f"gas.inertial={'true' if inertial else 'false'}"],
     )  # fmt: skip
     case = create_case(scene, tmp_path / f"pf{cells}", openfoam).path
-    cd = case / "system" / "controlDict"
-    dt = 1e-7
-    for k, v in [("writeFormat", "ascii"), ("deltaT", str(dt)), ("adjustTimeStep", "no"),
-                 ("endTime", str(steps * dt)), ("writeControl", "timeStep"),
-                 ("writeInterval", str(steps))]:  # fmt: skip
-        _set(cd, k, v)
-    fs = case / "system" / "fvSolution"
-    text = fs.read_text().replace(
-        "momentumPredictor yes;", "momentumPredictor yes;\n    frozenFlow yes;"
-    )
+    frozen_flow_step(case, 1e-7, steps)
     # a cold start: solve to round-off (the discretisation is under test; in
     # a run, relTol 1e-2 applies to a warm start one step old)
-    text = re.sub(
-        r'("pf\.\*"\s*\{[^}]*?tolerance\s+)[^;]+;(\s*relTol\s+)[^;]+;',
-        r"\g<1>1e-12;\g<2>0;",
-        text,
-    )
-    fs.write_text(text)
+    with edit_dict(case / "system" / "fvSolution") as fs:
+        fs["solvers"]["pf"].update(tolerance=1e-12, relTol=0)
     run_utility(openfoam, case, "postProcess", "-func", "writeCellCentres", "-time", "0")
     C = read_internal_field(case / "0" / "C")
     shutil.copy(case / "0.orig" / "alpha.granular", case / "0")
     write_internal_field(case / "0" / "alpha.granular", np.ones(len(C)))  # grains everywhere
     run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
-    out = sorted((p for p in case.iterdir() if re.fullmatch(r"[\d.e-]+", p.name) and p.name != "0"),
-                 key=lambda p: float(p.name))[-1]  # fmt: skip
+    out = case / time_directories(case)[-1]
     return scene, C, read_internal_field(out / "pf")
 
 
@@ -209,14 +187,14 @@ def test_compare_sets_the_coupled_sweep_on_eq23(coupled_sweep):
 
     Eq. 23 starts from the simulated open-top rate (as Zhou et al. do) and is
     recomputed here in the planar scaling of the paper's sec. III.B
-    (foamsilo.validation.eq23_planar), an independent code path. Tolerances:
+    (foamsilo.studies.gas.eq23_planar), an independent code path. Tolerances:
     A = 0.68 is the paper's fit to its own simulations (Fig. 4b: within a few
     %), so the points must lie within 5% of it (measured: +1.5% closed top,
     +0.0% injection); with A = 1 the closed top is over-predicted by ~10%,
     as in the paper. The open top at 16 cells across is within the 15% band
     of tests/test_planar_discharge.py (measured -7%).
     """
-    from foamsilo.validation import eq23_planar
+    from foamsilo.studies.gas import eq23_planar
 
     out, _ = coupled_sweep
     code, c = cli("compare", str(out))

@@ -16,8 +16,7 @@ import pytest
 
 from foamsilo.cli import main
 from foamsilo.errors import FoamsiloError
-from foamsilo.fields import CaseFields
-from foamsilo.post import read_function_object
+from foamsilo.post import CaseFields, read_function_object
 
 pytestmark = pytest.mark.openfoam
 
@@ -31,7 +30,7 @@ def cli(*args: str) -> tuple[int, dict]:
 
 @pytest.fixture(scope="module")
 def posted(planar_run):
-    case = planar_run[0].path
+    case = planar_run[0]
     code, s = cli("post", str(case))
     assert code == 0, s
     return case, s
@@ -46,7 +45,7 @@ def test_flux_and_volume_rates_agree_within_two_percent(posted):
 def test_free_surface_is_the_granular_volume_over_the_section(posted):
     """The mean height from the fields equals the function-object volume / L."""
     case, s = posted
-    _, vol = read_function_object(case, "granularVolume")
+    vol = read_function_object(case, "granularVolume").data
     scene_depth = 0.1 / 16  # the planar slab is one cell thick
     v = np.interp(0.5, vol[:, 0], vol[:, 1]) / scene_depth
     fs = s["fields"]["free_surface_m"]

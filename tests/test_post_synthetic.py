@@ -85,7 +85,8 @@ def test_function_object_files_are_merged_over_restarts(tmp_path):
     (root / "0.2" / "surfaceFieldValue.dat").write_text(
         hdr + "".join(f"{t:.2f}\t{10 * t}\t{t}\n" for t in (0.3, 0.4, 0.5))
     )
-    cols, data = read_function_object(tmp_path, "orificeFlow")
+    s = read_function_object(tmp_path, "orificeFlow")
+    cols, data = s.columns, s.data
     assert cols[0] == "Time"
     assert data[:, 0].tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
     assert data[2:, 1].tolist() == [3.0, 4.0, 5.0]  # the restart's rows win
@@ -97,9 +98,39 @@ def test_a_row_cut_short_by_a_kill_is_dropped(tmp_path):
     hdr = "# Time\tsum(alphaPhi0.granular)\tsum(phi)\n"
     # kill -9 while OpenFOAM wrote the third row: "0.3 3.25e" with no newline
     (root / "surfaceFieldValue.dat").write_text(hdr + "0.1\t1.5\t1\n0.2\t2.5\t2\n0.3\t3.25e")
-    _, data = read_function_object(tmp_path, "orificeFlow")
-    assert data[:, 0].tolist() == [0.1, 0.2]
-    assert data[:, 1].tolist() == [1.5, 2.5]
+    s = read_function_object(tmp_path, "orificeFlow")
+    assert s.data[:, 0].tolist() == [0.1, 0.2]
+    assert s.data[:, 1].tolist() == [1.5, 2.5]
+    assert "cut short" in s.notes[0]  # dropped, and said so
+
+
+HDR = "# Time\tsum(alphaPhi0.granular)\tsum(phi)\n"
+
+
+@pytest.mark.parametrize(
+    ("body", "line", "words"),
+    [
+        # a garbage line in the middle of the table (not a cut last row)
+        (b"0.1\t1.5\t1\nhello world\n0.3\t3.5\t3\n", 3, "not a row of numbers"),
+        # binary bytes where a row should be
+        (b"0.1\t1.5\t1\n\x00\x01\xff\xfe\n0.3\t3.5\t3\n", 3, "not text"),
+        # the solver wrote NaN: the run diverged
+        (b"0.1\t1.5\t1\n0.2\tnan\t2\n0.3\t3.5\t3\n", 3, "sum(alphaPhi0.granular) is nan"),
+        # a row with a missing column (not at the end)
+        (b"0.1\t1.5\t1\n0.2\t2.5\n0.3\t3.5\t3\n", 3, "2 values where the rows above have 3"),
+    ],
+)
+def test_damaged_output_is_refused_naming_the_file_and_line(tmp_path, body, line, words):
+    from foamsilo.post import DamagedOutputError
+
+    root = tmp_path / "postProcessing" / "orificeFlow" / "0"
+    root.mkdir(parents=True)
+    f = root / "surfaceFieldValue.dat"
+    f.write_bytes(HDR.encode() + body)
+    with pytest.raises(DamagedOutputError) as err:
+        read_function_object(tmp_path, "orificeFlow")
+    assert f"{f}:{line}" in str(err.value)
+    assert words in str(err.value)
 
 
 def test_a_kill_between_the_two_outputs_keeps_the_mass_balance(tmp_path):

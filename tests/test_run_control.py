@@ -7,13 +7,9 @@ from pathlib import Path
 
 import pytest
 
+from foamsilo.case.times import RESTART_FIELDS, prune_incomplete_times, time_directories
 from foamsilo.errors import SceneError
-from foamsilo.run import (
-    RESTART_FIELDS,
-    _all_local,
-    prune_incomplete_times,
-    time_directories,
-)
+from foamsilo.run.runner import _all_local
 from foamsilo.sweep import load_sweep
 
 FOOTER = "\n// " + "*" * 73 + " //\n"

@@ -68,7 +68,7 @@ def test_two_ranks_through_a_hostfile_match_the_serial_rate(tmp_path, serial_16)
     # the grains are still conserved across the rank boundary
     assert s["mass_balance_rel_error"] < 1e-8
     # the fields read from the processor directories equal the reconstructed ones
-    from foamsilo.fields import CaseFields
+    from foamsilo.post import CaseFields
 
     parts, whole = CaseFields(case, "decomposed"), CaseFields(case, "reconstructed")
     assert parts.decomposed and not whole.decomposed

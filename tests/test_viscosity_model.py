@@ -9,7 +9,6 @@ row of cells covers the pressure floor, the whole mu(I) curve and the cap.
 
 from __future__ import annotations
 
-import re
 import shutil
 
 import numpy as np
@@ -18,20 +17,11 @@ import pytest
 from foamsilo.case import create_case
 from foamsilo.foam import read_internal_field, run_utility, write_internal_field
 
-from .conftest import coarse_planar
+from .conftest import coarse_planar, frozen_flow_step
 
 pytestmark = pytest.mark.openfoam
 
 G0 = 10.0  # 1/s
-
-
-def _set(path, key, value):
-    text = path.read_text()
-    text, n = re.subn(
-        r"^(\s*" + re.escape(key) + r"\s+)[^;]+;", r"\g<1>" + value + ";", text, count=1, flags=re.M
-    )
-    assert n == 1, key
-    path.write_text(text)
 
 
 def mu_i_nu(p, shear, d, rho, mus, dmu, i0, eta_max, p_min):
@@ -45,22 +35,7 @@ def mu_i_nu(p, shear, d, rho, mus, dmu, i0, eta_max, p_min):
 def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
     scene = coarse_planar()
     case = create_case(scene, tmp_path / "visc", openfoam).path
-    cd = case / "system" / "controlDict"
-    for k, v in [
-        ("writeFormat", "ascii"),
-        ("deltaT", "1e-7"),
-        ("adjustTimeStep", "no"),
-        ("endTime", "1e-7"),
-        ("writeControl", "timeStep"),
-        ("writeInterval", "1"),
-    ]:
-        _set(cd, k, v)
-    fs = case / "system" / "fvSolution"
-    fs.write_text(
-        fs.read_text().replace(
-            "momentumPredictor yes;", "momentumPredictor yes;\n    frozenFlow yes;"
-        )
-    )
+    frozen_flow_step(case, 1e-7)
     run_utility(openfoam, case, "postProcess", "-func", "writeCellCentres", "-time", "0")
     C = read_internal_field(case / "0" / "C")
     x, y = C[:, 0], C[:, 1]

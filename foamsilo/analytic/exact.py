@@ -56,10 +56,10 @@ def bagnold_velocity(
     u(z) = (2/3) (I/d) sqrt(g cos theta) [h^(3/2) - (h - z)^(3/2)].
     """
     inertial = bagnold_inertial_number(theta, mu_s, delta_mu, i0)
-    z = np.clip(np.asarray(z, float), 0.0, depth)
-    return (
-        (2 / 3) * inertial / d * math.sqrt(g * math.cos(theta)) * (depth**1.5 - (depth - z) ** 1.5)
-    )
+    zz = np.clip(np.asarray(z, dtype=float), 0.0, depth)
+    below = depth - zz
+    scale = (2 / 3) * inertial / d * math.sqrt(g * math.cos(theta))
+    return np.asarray(scale * (depth**1.5 - below**1.5))
 
 
 def bagnold_mean_velocity(

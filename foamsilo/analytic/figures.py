@@ -8,6 +8,7 @@ equations with its Table I constants, phi_b = 0.6 and glass beads
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,7 +34,7 @@ def _plt():  # noqa: ANN202 - matplotlib module
     return plt
 
 
-def _q_of_d(name: str, d: np.ndarray, q_air_lpm: float, **kw: float) -> np.ndarray:
+def _q_of_d(name: str, d: np.ndarray, q_air_lpm: float, **kw: Any) -> np.ndarray:
     return np.array(
         [gas_assisted(name, float(di), q_air_lpm * LPM, phi_b=PHI_B, **kw).Q for di in d]
     )

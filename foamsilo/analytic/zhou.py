@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -161,7 +161,7 @@ def q0_bottom(
     ``area`` defaults to the disk pi D^2/4.
     """
     D = np.asarray(D, float)
-    S0 = np.pi * D**2 / 4 if area is None else area
+    S0 = np.pi * D**2 / 4 if area is None else np.asarray(area, float)
     return C0 * phi_b * rho_p * steric(alpha_D, beta, D, d) * S0 * np.sqrt(g * D)
 
 
@@ -377,8 +377,8 @@ def gas_assisted(
         phi_o = float(phi_orifice(D, d, phi_b, c.xi_phi, c.alpha_D, c.beta, W_phi, c.alpha_W))
     if not 0 < phi_o < 1:
         raise FoamsiloError(f"phi_o must be in (0, 1) (got {phi_o})")
-    Nv, Ni = reduced_numbers(Q0, phi_o, d, S_o, rho_p, eta_f, rho_f, g_eff)
-    Nv, Ni = A * float(Nv), float(Ni) if inertial else 0.0
+    nv, ni = reduced_numbers(Q0, phi_o, d, S_o, rho_p, eta_f, rho_f, g_eff)
+    Nv, Ni = A * float(nv), float(ni) if inertial else 0.0
     qt = phi_o * rho_p * q_air / Q0
     qbar = float(reduced_flow_rate(qt, Nv, Ni))
     return GasAssistedResult(
@@ -397,6 +397,6 @@ def gas_assisted(
     )
 
 
-def with_overrides(cfg: SiloConfig, **kw: float | None) -> SiloConfig:
+def with_overrides(cfg: SiloConfig, **kw: Any) -> SiloConfig:
     """Return a configuration with some constants replaced (fitted values)."""
     return replace(cfg, **{k: v for k, v in kw.items() if v is not None})

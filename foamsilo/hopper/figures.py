@@ -151,7 +151,7 @@ def preservation(
             theta_w,
             material,
             k=k,
-            cells=cells,  # type: ignore[arg-type]
+            cells=cells,
             records=300,
         )[0]
         for dim in (2, 3)
@@ -201,6 +201,7 @@ def plot_preservation(
         ax.plot(r.tau, 100 * r.error, "k-", lw=1, label=f"P{k}, N = {cells}, radial IC")
         if perturbed and dim in perturbed and perturbed[dim].error is not None:
             p = perturbed[dim]
+            assert p.error is not None
             ax.plot(
                 p.tau,
                 100 * p.error,

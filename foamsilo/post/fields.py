@@ -17,6 +17,7 @@ x = z = 0 (the wedge lies around the z = 0 plane); rectangular 3D boxes span
 from __future__ import annotations
 
 import math
+from dataclasses import asdict, dataclass
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -88,6 +89,11 @@ class CaseFields:
 
     # --------------------------------------------------------------- properties
     @property
+    def case_type(self) -> str:
+        """``reconstructed`` or ``decomposed``: where the fields are read from."""
+        return str(self._reader.case_type)
+
+    @property
     def decomposed(self) -> bool:
         """Whether the fields are read from the processor directories."""
         return self._reader.case_type == "decomposed"
@@ -131,7 +137,7 @@ class CaseFields:
                 self._reader.disable_all_cell_arrays()
                 for name in fields:
                     self._reader.enable_cell_array(name)
-            grid = self._reader.read()["internalMesh"]
+            grid: Any = self._reader.read()["internalMesh"]
             # the mesh does not move: cell volumes and centres are computed once
             if self._geometry is None or self._geometry[0] != grid.n_cells:
                 sized = grid.compute_cell_sizes(length=False, area=False, volume=True)
@@ -207,7 +213,7 @@ class CaseFields:
             "mean_m": self.granular_volume(time) / self.scene.cross_section_area,
         }
 
-    def velocity_profile(self, time: float, height: float, n: int = 200) -> dict[str, np.ndarray]:
+    def velocity_profile(self, time: float, height: float, n: int = 200) -> dict[str, Any]:
         """Velocity across the silo on a horizontal line at ``height`` [m].
 
         Returns the positions (x, or r from the axis), the horizontal and
@@ -388,7 +394,55 @@ def plot_free_surface(series: np.ndarray, scene: Scene, path: Path) -> None:
     finish(fig, ax, path)
 
 
-def field_summary(case: Path, case_type: str = "auto") -> dict[str, Any]:
+@dataclass
+class FieldSummary:
+    """What the written fields say at the latest written time.
+
+    Attributes
+    ----------
+    time_s
+        The time they were read at [s].
+    case_type
+        ``reconstructed`` or ``decomposed``: where they were read from.
+    free_surface_m
+        Free-surface heights on the axis, at the wall and the mean [m].
+    stagnant_fraction
+        Share of the granular volume at the viscosity cap.
+    profile_height_m
+        Height of the velocity profile [m] (0.15 H).
+    profile_mass_flow
+        Mass flow of grains down through the profile's line (None where the
+        geometry has no exact line integral: eccentric or 3D boxes).
+    profile_max_downward_m_s
+        Largest downward grain speed on the line (None: no grains there).
+    files
+        The tables and pictures written.
+    """
+
+    time_s: float
+    case_type: str
+    free_surface_m: dict[str, float]
+    stagnant_fraction: float | None
+    profile_height_m: float
+    profile_mass_flow: float | None
+    profile_max_downward_m_s: float | None
+    files: list[str]
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-friendly form (the ``fields`` section of the summary)."""
+        d = asdict(self)
+        if self.profile_mass_flow is None:
+            d["profile_mass_flow_reason"] = (
+                "the line integral is exact only for planar and axisymmetric flow"
+            )
+        return d
+
+
+def _finite(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def field_summary(case: Path, case_type: str = "auto") -> FieldSummary:
     """Reduce the written fields of a case; write the profile, surface and picture files.
 
     At the latest written time: the free surface (axis, wall, mean), the
@@ -421,15 +475,15 @@ def field_summary(case: Path, case_type: str = "auto") -> dict[str, Any]:
     plot_free_surface(np.array(series), f.scene, f.case / SURFACE_PNG)
     f.picture(t, f.case / FIELDS_PNG)
     grains = prof["alpha"] >= SURFACE_ALPHA
-    return {
-        "time_s": t,
-        "case_type": f._reader.case_type,
-        "free_surface_m": f.free_surface(t),
-        "stagnant_fraction": f.stagnant_fraction(t),
-        "profile_height_m": height,
-        "profile_mass_flow": prof["mass_flow"],
-        "profile_max_downward_m_s": float(-np.min(prof["u_vertical"][grains]))
+    return FieldSummary(
+        time_s=t,
+        case_type=f.case_type,
+        free_surface_m=f.free_surface(t),
+        stagnant_fraction=_finite(f.stagnant_fraction(t)),
+        profile_height_m=height,
+        profile_mass_flow=_finite(prof["mass_flow"]),
+        profile_max_downward_m_s=float(-np.min(prof["u_vertical"][grains]))
         if grains.any()
         else None,
-        "files": [PROFILE_CSV, PROFILE_PNG, SURFACE_CSV, SURFACE_PNG, FIELDS_PNG],
-    }
+        files=[PROFILE_CSV, PROFILE_PNG, SURFACE_CSV, SURFACE_PNG, FIELDS_PNG],
+    )

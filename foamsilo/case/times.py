@@ -1,0 +1,116 @@
+"""Time directories of a case: which are complete, which a killed run left half-written.
+
+A time directory is complete when the fields a restart needs are there and
+every file in it was written whole (OpenFOAM ends each file with its footer
+line). In a decomposed case a time counts when every processor directory
+holds it complete, or when it was reconstructed.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+#: Fields a time directory must hold, whole, to restart from it
+RESTART_FIELDS = ("U", "p_rgh", "alpha.granular", "phi", "uniform/time")
+_FOOTER = b"// ************************************************************************* //"
+
+
+def written_whole(path: Path) -> bool:
+    """Whether an OpenFOAM file ends with its footer (a killed write does not)."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as fh:
+            fh.seek(max(0, size - 200))
+            return _FOOTER in fh.read()
+    except OSError:
+        return False
+
+
+def is_time_name(name: str) -> bool:
+    """Whether a directory name reads as a time (``0``, ``0.25``, ``1e-07``)."""
+    try:
+        float(name)
+    except ValueError:
+        return False
+    return True
+
+
+def time_dirs(root: Path) -> list[Path]:
+    """Directories of ``root`` named as a time, oldest first (complete or not)."""
+    root = Path(root)
+    if not root.is_dir():
+        return []
+    out = [p for p in root.iterdir() if is_time_name(p.name) and p.is_dir()]
+    return sorted(out, key=lambda p: float(p.name))
+
+
+def is_complete(tdir: Path) -> bool:
+    """Whether a restart can start from this time directory."""
+    if float(tdir.name) == 0.0:
+        return (tdir / "U").exists() and (tdir / "alpha.granular").exists()
+    # the restart fields, and every other file written whole: the solver
+    # also reads some of the others (alphaPhi0 is READ_IF_PRESENT), and a
+    # truncated one stops the restart with a fatal IO error
+    if not all((tdir / f).is_file() for f in RESTART_FIELDS):
+        return False
+    return all(written_whole(p) for p in tdir.rglob("*") if p.is_file())
+
+
+def _complete_names(root: Path) -> set[str]:
+    return {p.name for p in time_dirs(root) if is_complete(p)}
+
+
+def processor_dirs(case: Path) -> list[Path]:
+    """Return the ``processorN`` directories of a decomposed case, in rank order."""
+    procs = [p for p in Path(case).glob("processor*") if p.name[9:].isdigit()]
+    return sorted(procs, key=lambda p: int(p.name[9:]))
+
+
+def complete_on_every_rank(case: Path) -> set[str]:
+    """Return the times complete in every processor directory (none: not decomposed)."""
+    procs = processor_dirs(case)
+    return set.intersection(*[_complete_names(pd) for pd in procs]) if procs else set()
+
+
+def time_directories(case: Path) -> list[str]:
+    """Complete time directories of a case (serial or decomposed), oldest first."""
+    names = _complete_names(case) | complete_on_every_rank(case)
+    return sorted(names, key=float)
+
+
+def latest_root_time(case: Path) -> float:
+    """Latest complete time of the case directory itself (0 when none)."""
+    return max((float(n) for n in _complete_names(case)), default=0.0)
+
+
+def latest_processor_time(case: Path) -> float:
+    """Latest time complete on every rank (-1 when not decomposed)."""
+    return max((float(n) for n in complete_on_every_rank(case)), default=-1.0)
+
+
+def prune_incomplete_times(case: Path) -> list[str]:
+    """Remove time directories that are not complete (a killed write).
+
+    Returns the names removed. The solver restarts from the latest time
+    directory it finds (``startFrom latestTime``), so a half-written one must
+    not be left for it.
+    """
+    procs = processor_dirs(case)
+    keep_root, keep_procs = _complete_names(case), complete_on_every_rank(case)
+    removed = []
+    for root, keep in [(Path(case), keep_root), *[(pd, keep_procs) for pd in procs]]:
+        for p in time_dirs(root):
+            if float(p.name) > 0 and p.name not in keep:
+                shutil.rmtree(p)
+                removed.append(str(p.relative_to(case)))
+    return removed
+
+
+def remove_results(case: Path) -> None:
+    """Remove every time after 0 (and the processor directories): a run from the start."""
+    for p in time_dirs(case):
+        if float(p.name) > 0:
+            shutil.rmtree(p)
+    for pd in processor_dirs(case):
+        shutil.rmtree(pd)

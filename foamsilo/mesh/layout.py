@@ -1,0 +1,348 @@
+"""Where the cells go: rows, profile blocks and O-grid cross-sections (no gmsh here).
+
+A mesh is laid out before gmsh sees it, so that cell counts are known (and
+tested) without meshing:
+
+* :func:`vertical_rows`: horizontal bands from the floor to the top of the
+  domain, square cells up to ``mesh.fine_height``, growing above it, with a
+  band edge at every corner of the wall and at the edges of a lateral orifice;
+* :func:`profile_layout`: the quad blocks of a planar or axisymmetric
+  profile, each side labelled with the patch it lies on (``walls``,
+  ``orifice``, ``atmosphere``, ``axis``) or ``None`` inside the silo;
+* :func:`ogrid_for`: the structured O-grid of a cylinder's cross-section.
+
+Patches are named here, where the shape is laid out, and carried through
+the gmsh build (:mod:`foamsilo.mesh.profile`, :mod:`foamsilo.mesh.solid`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from foamsilo.scene import Scene
+
+#: Patch names (gmsh physical groups, OpenFOAM patches)
+WALLS, ORIFICE, ATMOSPHERE, AXIS = "walls", "orifice", "atmosphere", "axis"
+
+#: Cells that must fit between the initial fill and the open top
+HEADSPACE_CELLS = 2
+#: Fewest cells on a quarter circle: the 48-gon holds 99.7% of the disk's area
+MIN_QUADRANT_CELLS = 12
+#: Largest cell width away from the orifice, in cells at the orifice (3D cross-sections)
+COARSE_RATIO_3D = 4.0
+
+
+@dataclass(frozen=True)
+class Row:
+    """A horizontal band of cells from y0 to y1.
+
+    Its n cells are each ``ratio`` times taller than the one below.
+    """
+
+    y0: float
+    y1: float
+    n: int
+    ratio: float = 1.0
+
+    def heights(self) -> list[float]:
+        """Cumulative layer heights as fractions of the band (gmsh ``heights``)."""
+        if abs(self.ratio - 1.0) < 1e-12:
+            return [(k + 1) / self.n for k in range(self.n)]
+        w = [self.ratio**k for k in range(self.n)]
+        tot = sum(w)
+        acc, out = 0.0, []
+        for x in w:
+            acc += x
+            out.append(acc / tot)
+        out[-1] = 1.0
+        return out
+
+
+def top_cell_ratio(scene: Scene) -> float:
+    """Height of the topmost cell over the cell width, capped by the headspace.
+
+    Cells taller than half the gap between the fill and the top put grains in
+    the top row of cells, and they leave through the open top. Below a ratio of
+    1.2 the mesh stays uniform.
+    """
+    h = scene.cell_size
+    s = scene.silo
+    cap = (s.height - s.fill_height) / (HEADSPACE_CELLS * h)
+    ratio = min(scene.mesh.top_cell_ratio, cap)
+    return ratio if ratio > 1.2 else 1.0
+
+
+def _fine_top(scene: Scene) -> float:
+    """Top of the square cells [m] (the domain height when the mesh is uniform)."""
+    s, h = scene.silo, scene.cell_size
+    if top_cell_ratio(scene) <= 1.0 + 1e-12:
+        return s.height
+    fine = scene.mesh.fine_height if scene.mesh.fine_height is not None else s.width
+    return min(s.height, max(h, round(fine / h) * h))
+
+
+def _growth(span: float, first: float, last: float) -> tuple[int, float]:
+    """Cells and per-cell ratio for a band from cells of size ``first`` to ``last``."""
+    R = last / first
+    if R < 1.2:
+        return max(1, round(span / first)), 1.0
+    n = max(2, round((span / first) * math.log(R) / (R - 1)))
+    return n, R ** (1.0 / (n - 1))
+
+
+def vertical_rows(scene: Scene) -> list[Row]:
+    """Bands of cells from the bottom to the top of the domain.
+
+    Square cells (of the size at the orifice) up to ``mesh.fine_height`` (or the
+    silo width), band edges at every corner of the wall and at the edges of a
+    lateral orifice, then cells growing to ``mesh.top_cell_ratio`` times taller
+    (capped so that the headspace above the fill keeps two cells).
+    """
+    s = scene.silo
+    h = scene.cell_size
+    H = s.height
+    cuts = {y for y, _ in s.profile if 0.0 < y < H}
+    if s.orifice_position == "lateral":
+        assert s.orifice_height is not None
+        cuts |= {y for y in (s.orifice_height, s.orifice_height + s.orifice_width) if 0 < y < H}
+    R = top_cell_ratio(scene)
+    fine_top = H
+    if R > 1.0:
+        need = max(cuts, default=0.0)
+        fine_top = max(_fine_top(scene), math.ceil(need / h - 1e-9) * h + (h if need > 0 else 0.0))
+        if fine_top > H - 2 * h:
+            fine_top = H
+    edges = sorted({0.0, fine_top, *cuts} | ({H} if fine_top < H else set()))
+    edges = [y for y in edges if y <= H]
+    rows = []
+    for y0, y1 in zip(edges[:-1], edges[1:], strict=True):
+        if y0 >= fine_top - 1e-12:
+            # a geometric series from h to R h over n cells fills the span
+            n = max(2, round(((y1 - y0) / h) * math.log(R) / (R - 1)))
+            rows.append(Row(y0, y1, n, R ** (1.0 / (n - 1))))
+        else:
+            rows.append(Row(y0, y1, max(1, round((y1 - y0) / h))))
+    return rows
+
+
+def slot_divisions(width: float, orifice_width: float, cells_across: int) -> tuple[int, int, int]:
+    """Cells across the left wall segment, a centred orifice, and the right segment.
+
+    The orifice gets at least two cells, and the count is nudged by one so
+    that the mesh stays symmetric about the axis.
+    """
+    n = cells_across
+    dx = width / n
+    n_orf = max(2, round(orifice_width / dx))
+    if (n - n_orf) % 2:
+        n_orf += 1 if orifice_width / dx > n_orf else -1
+    n_side = (n - n_orf) // 2
+    return n_side, n_orf, n_side
+
+
+# ---------------------------------------------------------------------------- profiles
+
+Side = str | None
+
+
+@dataclass(frozen=True)
+class Block:
+    """One structured quad block of a profile (the x-y plane, y up).
+
+    Attributes
+    ----------
+    corners
+        (x, y) of the bottom-left, bottom-right, top-right and top-left corners.
+    cells
+        Cells along x and along y.
+    ratio
+        Growth of the cell height per cell, upward.
+    sides
+        Patch of the bottom, right, top and left sides (None: inside the silo).
+    """
+
+    corners: tuple[tuple[float, float], ...]
+    cells: tuple[int, int]
+    ratio: float
+    sides: tuple[Side, Side, Side, Side]
+
+
+@dataclass(frozen=True)
+class ProfileLayout:
+    """The blocks of a planar or axisymmetric profile, row by row from the floor."""
+
+    blocks: tuple[Block, ...]
+    columns: tuple[int, ...]
+    rows: tuple[Row, ...]
+
+    @property
+    def n_cells(self) -> int:
+        """Cells of the mesh (the profile is one cell thick)."""
+        return sum(self.columns) * sum(r.n for r in self.rows)
+
+
+def profile_columns(scene: Scene) -> tuple[list[tuple[float, float]], list[int], list[Side]]:
+    """Column edges of a planar or axisymmetric profile.
+
+    Returns the edges as pairs (a, b) with x = a + b r(y) (r the wall's
+    half-width at height y: a fixed x where b = 0, a point that follows a
+    sloping wall otherwise), the cells of each column, and the patch of each
+    column's bottom.
+    """
+    s = scene.silo
+    h = scene.cell_size
+    R = s.width / 2
+    r_o = s.orifice_width / 2
+    planar = scene.representation == "planar"
+    if s.shape == "hopper":
+        # as many cells across the outlet as there are across the orifice, but
+        # never wider than COARSE_RATIO_3D cells at the top
+        n = max(2, round(r_o / h), math.ceil(R / (COARSE_RATIO_3D * h)))
+        if planar:
+            return [(R, -1.0), (R, 0.0), (R, 1.0)], [n, n], [ORIFICE, ORIFICE]
+        return [(0.0, 0.0), (0.0, 1.0)], [n], [ORIFICE]
+    if planar and s.orifice_position == "bottom":  # rectangular silo, centred slot
+        left, orf, right = slot_divisions(s.width, s.orifice_width, scene.mesh.cells_across)
+        x1, x2 = (s.width - s.orifice_width) / 2, (s.width + s.orifice_width) / 2
+        edges = [(0.0, 0.0), (x1, 0.0), (x2, 0.0), (s.width, 0.0)]
+        return edges, [left, orf, right], [WALLS, ORIFICE, WALLS]
+    if planar:  # rectangular silo with a lateral orifice: wall to wall
+        return [(0.0, 0.0), (0.0, 2.0)], [scene.mesh.cells_across], [WALLS]
+    # axisymmetric flat-bottomed cylinder: the axis, the orifice edge, the wall
+    n1 = max(1, round(r_o / h))
+    n2 = max(1, round((R - r_o) / h))
+    return [(0.0, 0.0), (0.0, r_o / R), (0.0, 1.0)], [n1, n2], [ORIFICE, WALLS]
+
+
+def profile_layout(scene: Scene) -> ProfileLayout:
+    """Quad blocks of a planar or axisymmetric profile, sides labelled with their patch.
+
+    Blocks are listed row by row from the floor, left to right. The left side
+    of an axisymmetric profile is the axis; the right side of the last column
+    is the wall, or the orifice in the rows of a lateral orifice.
+    """
+    s = scene.silo
+    rows = vertical_rows(scene)
+    edges, ncols, bottoms = profile_columns(scene)
+    axisymmetric = scene.representation == "axisymmetric"
+
+    def x(edge: tuple[float, float], y: float) -> float:
+        a, b = edge
+        return a if b == 0.0 else a + b * s.wall_radius(y)
+
+    def right_side(row: Row) -> Side:
+        if s.orifice_position == "lateral":
+            assert s.orifice_height is not None
+            lo, hi = s.orifice_height, s.orifice_height + s.orifice_width
+            if row.y0 >= lo - 1e-12 and row.y1 <= hi + 1e-12:
+                return ORIFICE
+        return WALLS
+
+    blocks = []
+    last_row, last_col = len(rows) - 1, len(ncols) - 1
+    for j, row in enumerate(rows):
+        for i, n in enumerate(ncols):
+            ea, eb = edges[i], edges[i + 1]
+            corners = (
+                (x(ea, row.y0), row.y0),
+                (x(eb, row.y0), row.y0),
+                (x(eb, row.y1), row.y1),
+                (x(ea, row.y1), row.y1),
+            )
+            bottom = bottoms[i] if j == 0 else None
+            top = ATMOSPHERE if j == last_row else None
+            left = (AXIS if axisymmetric else WALLS) if i == 0 else None
+            right = right_side(row) if i == last_col else None
+            blocks.append(Block(corners, (n, row.n), row.ratio, (bottom, right, top, left)))
+    return ProfileLayout(tuple(blocks), tuple(ncols), tuple(rows))
+
+
+# ---------------------------------------------------------------------------- 3D cross-sections
+
+
+@dataclass(frozen=True)
+class OGrid:
+    """Structured O-grid of a disk (cross-section in the x-z plane).
+
+    A central square (corners at ``square`` x the first ring radius), then
+    rings out to each radius in ``rings``; quadrants centred on +x, +z, -x,
+    -z. ``arcs`` gives, per quadrant, the angular segments (start, end, cells)
+    between the quadrant's corners. ``orifice_rings`` rings from the centre
+    (and the square) make the bottom orifice; ``lateral_arc`` is the angular
+    segment of the wall that is a lateral orifice (or None).
+    """
+
+    rings: tuple[float, ...]
+    ring_cells: tuple[tuple[int, float], ...]
+    arcs: tuple[tuple[tuple[float, float, int], ...], ...]
+    orifice_rings: int = 0
+    lateral_arc: tuple[float, float] | None = None
+    square: float = 0.6
+
+    @property
+    def n_cells(self) -> int:
+        """Cells in the cross-section."""
+        na = sum(n for _, _, n in self.arcs[0])
+        nb = sum(n for _, _, n in self.arcs[1])
+        around = 2 * (na + nb)
+        return na * nb + around * sum(n for n, _ in self.ring_cells)
+
+
+def ogrid_for(scene: Scene) -> OGrid:
+    """Lay out the O-grid of a cylinder's (or a 3D hopper's top) cross-section."""
+    s = scene.silo
+    h = scene.cell_size
+    R = s.width / 2
+    coarse = COARSE_RATIO_3D * h
+    q = math.pi / 4
+    if s.orifice_position == "lateral":
+        assert s.orifice_length is not None
+        tw = s.orifice_length / (2 * R)
+        n_orf = max(2, round(s.orifice_length / h))
+        n_side = max(MIN_QUADRANT_CELLS // 2, round((q - tw) * R / (2 * h)))
+        n_b = max(MIN_QUADRANT_CELLS, round(2 * q * R / (2 * h)))
+        quad0 = ((-q, -tw, n_side), (-tw, tw, n_orf), (tw, q, n_side))
+        n_a = 2 * n_side + n_orf
+        n_r = max(2, round((1 - 0.6) * R / h))
+        return OGrid(
+            (R,),
+            ((n_r, 1.0),),
+            (quad0, ((q, 3 * q, n_b),), ((3 * q, 5 * q, n_a),), ((5 * q, 7 * q, n_b),)),
+            lateral_arc=(-tw, tw),
+        )
+    r_o = s.orifice_width / 2
+    n_q = max(MIN_QUADRANT_CELLS, round(q * 2 * r_o / h), math.ceil(2 * q * R / coarse))
+    arcs = tuple(((q * (2 * k - 1), q * (2 * k + 1), n_q),) for k in range(4))
+    if s.shape == "hopper":  # the whole bottom is the outlet; radii scale down to it
+        size = 2 * q * r_o / n_q  # arc cell at the outlet
+        n_r = max(2, round((1 - 0.6) * r_o / size))
+        return OGrid((R,), ((n_r, 1.0),), arcs, orifice_rings=1)
+    # flat bottom, centred orifice: a ring ends on the orifice edge, then the
+    # cells grow towards the wall up to the arc spacing there
+    size = 2 * q * r_o / n_q
+    n_r1 = max(1, round((1 - 0.6) * r_o / max(size, 0.8 * h)))
+    first = (1 - 0.6) * r_o / n_r1
+    last = min(coarse, max(first, 2 * q * R / n_q))
+    n_r2, g2 = _growth(R - r_o, first, last)
+    return OGrid((r_o, R), ((n_r1, 1.0), (n_r2, g2)), arcs, orifice_rings=1)
+
+
+def cells_estimate(scene: Scene) -> int:
+    """Return the number of cells the scene's mesh will have (structured meshes exactly)."""
+    s = scene.silo
+    rep = scene.representation
+    rows = vertical_rows(scene)
+    layers = sum(r.n for r in rows)
+    if rep in ("planar", "axisymmetric"):
+        return profile_layout(scene).n_cells
+    h = scene.cell_size
+    if s.shape == "rectangular":
+        W = s.thickness or h
+        return scene.mesh.cells_across * max(2, round(W / h)) * layers
+    if s.eccentricity > 0 or (
+        s.orifice_position == "lateral" and s.resolved_orifice_shape == "circular"
+    ):
+        # unstructured: cross-section area over the mean cell area, roughly
+        return round(math.pi * (s.width / 2) ** 2 / (2 * h) ** 2) * layers
+    return ogrid_for(scene).n_cells * layers

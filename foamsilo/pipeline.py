@@ -1,0 +1,562 @@
+"""The one pipeline: prepare (scene -> case), run (siloFoam), reduce (summary and report).
+
+Every command, study and test that makes a case, runs it or reduces it goes
+through here:
+
+* :func:`prepare` turns a :class:`CaseSpec` into a case directory that can
+  run: it writes a new case, reuses one that holds the same scene, replaces
+  one on request, and rebuilds a lost mesh from the case's own scene;
+* :func:`run` runs the solver on it under the case's lock, after checking
+  the case's state (:mod:`foamsilo.case.lifecycle`), and records the outcome
+  in ``run.json`` (finished, interrupted, diverged, failed, time-limit);
+* :func:`reduce` reduces it (:mod:`foamsilo.post`), sets it on its analytic
+  law (:mod:`foamsilo.compare`), writes ``summary.json`` and the report;
+* :func:`run_case` is the three in a row, and :func:`run_many` runs many
+  specs, each in its own worker process, under a CPU budget: resumable (a
+  finished case is only reduced again, an interrupted one resumed), and a
+  killed driver takes its workers and their solvers with it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from foamsilo.case import (
+    RUN_RECORD,
+    SCENE_FILE,
+    CaseLock,
+    CaseState,
+    create_case,
+    inspect,
+    read_metadata,
+    rebuild_mesh,
+    require,
+    reset_results,
+    write_whole,
+)
+from foamsilo.compare import COMPARE_MD, RunPoint, compare_runs, references
+from foamsilo.errors import (
+    CaseStateError,
+    DivergenceError,
+    FoamError,
+    FoamsiloError,
+    InputError,
+    RunInterruptedError,
+    RunTimeLimitError,
+    UsageError,
+)
+from foamsilo.foam import reconstruct_par
+from foamsilo.jsonio import dumps, jsonable
+from foamsilo.post import reduce_case
+from foamsilo.process import tied_to_parent
+from foamsilo.report import case_report
+from foamsilo.run import ProgressCallback, RunResult, run_solver
+from foamsilo.scene import is_scene_file, load_scene, load_scene_file, scene_digest
+from foamsilo.solver import ensure_solver
+from foamsilo.summary import RunSummary, write_summary
+from foamsilo.toolchain import OpenFOAM, find_openfoam
+
+Say = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    pass
+
+
+@dataclass(frozen=True)
+class CaseSpec:
+    """One case to prepare, run and reduce.
+
+    Attributes
+    ----------
+    case_dir
+        The case directory.
+    scene
+        Preset name or scene file; None: the case directory's own scene.
+    overrides
+        ``section.key=value`` changes to the scene.
+    n_procs
+        MPI ranks (None: the scene's ``run.n_procs``).
+    hostfile
+        Open MPI hostfile for runs across machines.
+    resume
+        Go on with an interrupted (or failed) run from its latest complete time.
+    rerun
+        Run again from t = 0 (the results of earlier runs are removed).
+    overwrite
+        Write the case afresh (only a foamsilo case is ever replaced).
+    update
+        Replace a case that holds another scene; reuse one that holds this one.
+    reconstruct
+        After a parallel run, merge the processor directories.
+    max_wall_seconds
+        Stop the solver after this much wall time.
+    label
+        A name for the case in tables and progress lines.
+    """
+
+    case_dir: Path
+    scene: str | None = None
+    overrides: tuple[str, ...] = ()
+    n_procs: int | None = None
+    hostfile: Path | None = None
+    resume: bool = False
+    rerun: bool = False
+    overwrite: bool = False
+    update: bool = False
+    reconstruct: bool = False
+    max_wall_seconds: float | None = None
+    label: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-friendly form (how a worker process receives it)."""
+        out: dict[str, Any] = jsonable(asdict(self))
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> CaseSpec:
+        """Inverse of :meth:`as_dict`."""
+        d = dict(data)
+        d["case_dir"] = Path(d["case_dir"])
+        d["overrides"] = tuple(d.get("overrides") or ())
+        if d.get("hostfile"):
+            d["hostfile"] = Path(d["hostfile"])
+        return cls(**d)
+
+
+# ----------------------------------------------------------------------------- prepare
+
+
+def prepare(spec: CaseSpec, of: OpenFOAM, say: Say = _quiet) -> Path:
+    """Make the case of ``spec`` ready to run; return its directory.
+
+    Raises
+    ------
+    SceneError, UsageError
+        Bad scene or path (nothing is written).
+    CaseStateError
+        The directory holds another scene (without ``update`` or
+        ``overwrite``), a running case, or files that are not a case.
+    """
+    from foamsilo.case import check_case_path
+
+    case_dir = check_case_path(spec.case_dir)
+    status = inspect(case_dir)
+    if status.state is CaseState.RUNNING:
+        raise CaseStateError(case_dir, "running", status.advice())
+    if spec.scene is None:  # a case directory
+        if status.state is CaseState.NEW:
+            require(status, set())
+        if spec.overrides:
+            raise UsageError("--set", "cannot change an existing case; make a new one")
+        if spec.overwrite:
+            own = (case_dir / SCENE_FILE).read_text()
+            say(f"writing {case_dir} afresh from its {SCENE_FILE}")
+            create_case(
+                load_scene_file(case_dir / SCENE_FILE), case_dir, of, overwrite=True, scene_text=own
+            )
+            return case_dir
+        return _ensure_mesh(case_dir, of, say)
+    scene = load_scene(spec.scene, list(spec.overrides))
+    text = None
+    if is_scene_file(spec.scene) and not spec.overrides:
+        text = Path(spec.scene).read_text()
+    if status.state is CaseState.NEW:
+        say(f"writing case {case_dir}")
+        create_case(scene, case_dir, of, scene_text=text)
+        return case_dir
+    same = read_metadata(case_dir).get("scene_digest") == scene_digest(scene)
+    if spec.overwrite or (spec.update and not same):
+        if not same:
+            say(f"{case_dir} holds another version of the scene: replacing it")
+        create_case(scene, case_dir, of, overwrite=True, scene_text=text)
+        return case_dir
+    if not same:
+        raise CaseStateError(
+            case_dir,
+            status.state.value,
+            f"{case_dir} holds a case of another scene ({status.state.value}): --update "
+            "replaces it, --overwrite writes it afresh, or choose another -o",
+        )
+    say(f"using existing case {case_dir}")
+    return _ensure_mesh(case_dir, of, say)
+
+
+def _ensure_mesh(case_dir: Path, of: OpenFOAM, say: Say) -> Path:
+    if inspect(case_dir).mesh_missing:
+        say(f"{case_dir}: constant/polyMesh is missing: meshing again from {SCENE_FILE}")
+        with CaseLock(case_dir):
+            rebuild_mesh(case_dir, of)
+    return case_dir
+
+
+# ----------------------------------------------------------------------------- run
+
+
+def _record(case_dir: Path, status: str, **data: Any) -> None:
+    write_whole(case_dir / RUN_RECORD, dumps({"status": status, **data}) + "\n")
+
+
+def _error_record(exc: BaseException) -> dict[str, Any]:
+    out: dict[str, Any] = {"type": type(exc).__name__, "message": str(exc)}
+    for k in ("quantity", "time", "last_good_time"):
+        if hasattr(exc, k):
+            out[k] = getattr(exc, k)
+    return out
+
+
+def run(
+    case_dir: Path,
+    of: OpenFOAM,
+    *,
+    n_procs: int | None = None,
+    hostfile: Path | None = None,
+    resume: bool = False,
+    rerun: bool = False,
+    reconstruct: bool = False,
+    progress: ProgressCallback | None = None,
+    max_wall_seconds: float | None = None,
+    say: Say = _quiet,
+) -> RunResult | None:
+    """Run the solver on a case, if its state calls for it; None when it had finished.
+
+    A finished case is not run again unless ``rerun``; an interrupted or
+    failed one only with ``resume`` (from its latest complete time) or
+    ``rerun`` (from t = 0); a running one never. The outcome is recorded in
+    ``run.json``.
+
+    Raises
+    ------
+    CaseStateError
+        The state does not allow the run (the message says what would).
+    DivergenceError, RunTimeLimitError, RunInterruptedError, FoamError
+        From the solver run (recorded in ``run.json``, the case kept).
+    """
+    case_dir = Path(case_dir).resolve()
+    status = inspect(case_dir)
+    if status.state is CaseState.FINISHED and not rerun:
+        say("run already finished; reducing it again")
+        return None
+    if status.state in (CaseState.INTERRUPTED, CaseState.FAILED) and not (resume or rerun):
+        raise CaseStateError(case_dir, status.state.value, status.advice())
+    require(
+        status, {CaseState.PREPARED, CaseState.INTERRUPTED, CaseState.FAILED, CaseState.FINISHED}
+    )
+    scene = load_scene_file(case_dir / SCENE_FILE)
+    ranks = n_procs or scene.run.n_procs
+    if ranks < 1:
+        raise UsageError("--np", f"{ranks} ranks; allowed: an integer >= 1")
+    solver = ensure_solver(of=of, log=say)
+    with CaseLock(case_dir) as lock:
+        if lock.stale is not None:
+            say(f"a stale lock of {lock.stale.describe()} was cleared: that process is gone")
+        if rerun and status.state is not CaseState.PREPARED:
+            reset_results(case_dir)
+            say("starting again from t = 0")
+        elif status.latest_time:
+            say(f"resuming from t = {status.latest_time} s")
+        _record(case_dir, "running", n_procs=ranks, pid=os.getpid())
+        try:
+            result = run_solver(
+                case_dir,
+                of,
+                solver,
+                progress=progress,
+                n_procs=ranks,
+                hostfile=hostfile,
+                max_wall_seconds=max_wall_seconds,
+            )
+        except RunInterruptedError as exc:
+            _record(case_dir, "interrupted", n_procs=ranks, error=_error_record(exc))
+            raise
+        except DivergenceError as exc:
+            _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc))
+            raise
+        except RunTimeLimitError as exc:
+            _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(exc))
+            raise
+        except (FoamError, FoamsiloError) as exc:
+            _record(case_dir, "failed", n_procs=ranks, error=_error_record(exc))
+            raise
+        except KeyboardInterrupt:
+            _record(case_dir, "interrupted", n_procs=ranks)
+            raise
+        if reconstruct and ranks > 1:
+            say("reconstructing the processor directories")
+            reconstruct_par(of, case_dir)
+        _record(case_dir, "finished", **result.as_dict())
+    return result
+
+
+# ----------------------------------------------------------------------------- reduce
+
+
+def reduce(case_dir: Path) -> RunSummary:
+    """Reduce a case: ``summary.json``, ``compare.*``, the pictures and ``report.md``.
+
+    Raises
+    ------
+    CaseStateError
+        The case is running, or was never run.
+    FoamsiloError
+        Its output is missing or damaged.
+    """
+    case_dir = Path(case_dir).resolve()
+    status = inspect(case_dir)
+    if status.state is CaseState.RUNNING:
+        raise CaseStateError(case_dir, "running", status.advice() + "; reduce it when it ends")
+    if status.state is CaseState.NEW:
+        require(status, set())
+    red = reduce_case(case_dir)
+    record = status.last_run
+    run_info = {k: v for k, v in record.items() if k not in ("status", "pid")} if record else None
+    if record and record.get("status") != "finished":
+        run_info = {"status": record.get("status"), **(run_info or {})}
+    summary = RunSummary(red, references(red.scene), None, run_info)
+    st = red.steady
+    try:
+        point = RunPoint(
+            case_dir,
+            red.scene,
+            st.steady,
+            st.q if st.steady else None,
+            st.q_std if st.steady else None,
+            st.reason,
+        )
+        summary.comparison = compare_runs([point], case_dir)
+    except FoamsiloError as exc:  # no law for this geometry, or no steady rate
+        (case_dir / COMPARE_MD).unlink(missing_ok=True)
+        summary.comparison = {"error": str(exc)}
+    write_summary(summary)
+    case_report(summary)
+    return summary
+
+
+# ----------------------------------------------------------------------------- one case
+
+
+def run_case(
+    spec: CaseSpec,
+    *,
+    of: OpenFOAM | None = None,
+    progress: ProgressCallback | None = None,
+    say: Say = _quiet,
+) -> RunSummary:
+    """Prepare, run and reduce one case."""
+    of = of or find_openfoam()
+    case_dir = prepare(spec, of, say)
+    run(
+        case_dir,
+        of,
+        n_procs=spec.n_procs,
+        hostfile=spec.hostfile,
+        resume=spec.resume,
+        rerun=spec.rerun,
+        reconstruct=spec.reconstruct,
+        progress=progress,
+        max_wall_seconds=spec.max_wall_seconds,
+        say=say,
+    )
+    return reduce(case_dir)
+
+
+# ----------------------------------------------------------------------------- many cases
+
+
+@dataclass
+class Outcome:
+    """What one case of :func:`run_many` gave.
+
+    Attributes
+    ----------
+    spec
+        The case.
+    status
+        ``ok``, or the type of the error that stopped it (``DivergenceError``...).
+    summary
+        Its ``summary.json`` content (a reduced case), else None.
+    error
+        The error (type, message, and what it names), else None.
+    wall_s
+        Wall time of the worker.
+    """
+
+    spec: CaseSpec
+    status: str
+    summary: dict[str, Any] | None = None
+    error: dict[str, Any] | None = None
+    wall_s: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        """Whether the case was run (or found finished) and reduced."""
+        return self.status == "ok"
+
+
+def error_payload(exc: BaseException) -> dict[str, Any]:
+    """Return the error as the JSON outputs carry it: type, message, and what it names."""
+    from foamsilo.errors import MeshError, SceneError, ToolchainError
+
+    err: dict[str, Any] = {"type": type(exc).__name__, "message": str(exc)}
+    if isinstance(exc, (SceneError, UsageError)):
+        err["field"] = exc.field
+    if isinstance(exc, ToolchainError):
+        err.update(component=exc.component, fix=exc.fix)
+    if isinstance(exc, FoamError):
+        err.update(command=exc.command, returncode=exc.returncode, output=exc.output[-4000:])
+    if isinstance(exc, (DivergenceError, RunInterruptedError, RunTimeLimitError)):
+        err.update(time=exc.time, case_dir=str(exc.case_dir))
+    if isinstance(exc, (DivergenceError, RunInterruptedError)):
+        err["last_good_time"] = exc.last_good_time
+    if isinstance(exc, DivergenceError):
+        err["quantity"] = exc.quantity
+    if isinstance(exc, CaseStateError):
+        err.update(state=exc.state, case_dir=str(exc.case_dir))
+    if isinstance(exc, MeshError) and exc.geometry_file:
+        err["geometry_file"] = str(exc.geometry_file)
+    return err
+
+
+def _worker_main() -> int:
+    """``python -m foamsilo.pipeline``: one :class:`CaseSpec` (JSON, stdin) -> Outcome (stdout)."""
+    out = sys.stdout
+    spec = CaseSpec.from_dict(json.loads(sys.stdin.read()))
+    t0 = time.perf_counter()
+    with contextlib.redirect_stdout(sys.stderr):  # PyFoam prints
+        try:
+            summary = run_case(spec)
+            outcome = Outcome(spec, "ok", summary.as_json())
+        except KeyboardInterrupt:
+            outcome = Outcome(spec, "RunInterruptedError", error={"message": "interrupted"})
+        except (FoamsiloError, OSError) as exc:
+            outcome = Outcome(spec, type(exc).__name__, error=error_payload(exc))
+    outcome.wall_s = time.perf_counter() - t0
+    out.write(dumps(asdict(outcome)) + "\n")
+    return 0
+
+
+def _run_worker(spec: CaseSpec, procs: list[subprocess.Popen[str]]) -> Outcome:
+    """Run one spec in a worker process (tied to this one: it dies with it)."""
+    argv = tied_to_parent([sys.executable, "-m", "foamsilo.pipeline"])
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(
+        argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    procs.append(proc)
+    out, err = proc.communicate(json.dumps(spec.as_dict()))
+    try:
+        data = json.loads(out)
+        return Outcome(
+            replace(spec),
+            data["status"],
+            data.get("summary"),
+            data.get("error"),
+            data.get("wall_s", 0.0),
+        )
+    except (ValueError, KeyError):
+        message = f"the worker ended with status {proc.returncode}: {err[-2000:]}"
+        return Outcome(
+            spec,
+            "crash",
+            error={"type": "crash", "message": message},
+            wall_s=time.perf_counter() - t0,
+        )
+
+
+@dataclass
+class Budget:
+    """How many cores many cases may use at once.
+
+    Attributes
+    ----------
+    cores
+        Cores to use (default: all of this machine's).
+    ranks_per_case
+        MPI ranks of each case.
+    """
+
+    cores: int = field(default_factory=lambda: os.cpu_count() or 1)
+    ranks_per_case: int = 1
+
+    def __post_init__(self) -> None:
+        if self.ranks_per_case < 1:
+            raise InputError(f"ranks per case: got {self.ranks_per_case}; allowed: >= 1")
+        if self.cores < self.ranks_per_case:
+            raise InputError(
+                f"CPU budget: got {self.cores} cores; allowed: >= the ranks per case "
+                f"({self.ranks_per_case})"
+            )
+
+    @property
+    def cases_at_once(self) -> int:
+        """How many cases run at the same time (cases x ranks <= cores)."""
+        return max(1, self.cores // self.ranks_per_case)
+
+
+def run_many(
+    specs: list[CaseSpec],
+    budget: Budget | None = None,
+    on_done: Callable[[Outcome], None] | None = None,
+) -> list[Outcome]:
+    """Prepare, run and reduce many cases, ``budget.cases_at_once`` at a time.
+
+    Each case runs in its own worker process (``python -m foamsilo.pipeline``)
+    tied to this one. Returns one :class:`Outcome` per spec, in order;
+    ``on_done`` is called as each finishes.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C: the workers stop their solvers (resumable), this waits for
+        them, then raises.
+    """
+    budget = budget or Budget()
+    results: dict[int, Outcome] = {}
+    procs: list[subprocess.Popen[str]] = []
+    pool = ThreadPoolExecutor(max_workers=budget.cases_at_once)
+    try:
+        futures = {pool.submit(_run_worker, s, procs): i for i, s in enumerate(specs)}
+        for fut in as_completed(futures):
+            i = futures[fut]
+            results[i] = fut.result()
+            if on_done is not None:
+                on_done(results[i])
+    except KeyboardInterrupt:
+        for p in procs:  # a SIGINT sent to this process alone is passed on
+            with contextlib.suppress(OSError):
+                if p.poll() is None:
+                    p.send_signal(signal.SIGINT)
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    finally:
+        pool.shutdown(wait=True)
+    return [results[i] for i in range(len(specs))]
+
+
+if __name__ == "__main__":  # pragma: no cover - the worker entry point
+    sys.exit(_worker_main())
+
+
+__all__ = [
+    "Budget",
+    "CaseSpec",
+    "Outcome",
+    "RunSummary",
+    "error_payload",
+    "prepare",
+    "reduce",
+    "run",
+    "run_case",
+    "run_many",
+]

@@ -1,0 +1,148 @@
+"""The stationary discharge regime of Q(t) and its rate.
+
+The steady window follows the experiments (Zhou et al. 2019, sec. II.B):
+the mean of the instantaneous rate over the stationary regime, after the
+start-up transient and before the silo runs low.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from foamsilo.post.discharge import Discharge
+from foamsilo.scene import Scene
+
+#: Smoothed Q must stay within this of the plateau for the window to start
+STEADY_TOLERANCE = 0.02
+#: Largest relative drift of Q over the window still called steady
+STEADY_MAX_DRIFT = 0.03
+#: Largest excursion of the smoothed Q from its mean still called steady
+STEADY_MAX_EXCURSION = 0.05
+#: Window ends when the equivalent fill height drops below this many L
+LOW_FILL = 0.5
+
+
+@dataclass
+class SteadyState:
+    """The stationary discharge regime and its rate.
+
+    Attributes
+    ----------
+    steady
+        A stationary regime was found (long enough, drift below the limit).
+    t_start, t_end
+        The window [s].
+    q, q_std
+        Time-weighted mean and standard deviation of Q over the window.
+    q_from_volume
+        -rho dV/dt fitted over the window (independent estimate).
+    drift
+        Relative change of Q over the window (linear fit).
+    reason
+        Why it is not steady, when it is not.
+    excursion
+        Largest deviation of the smoothed rate from its mean in the window.
+    """
+
+    steady: bool
+    t_start: float
+    t_end: float
+    q: float
+    q_std: float
+    q_from_volume: float
+    drift: float
+    reason: str = ""
+    excursion: float = math.nan
+
+
+def _smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
+    """Average over a moving time window (handles variable steps)."""
+    w = np.diff(np.concatenate([[t[0]], t]))
+    cy = np.concatenate([[0.0], np.cumsum(y * w)])
+    cw = np.concatenate([[0.0], np.cumsum(w)])
+    lo = np.searchsorted(t, t - width / 2, side="left")
+    hi = np.searchsorted(t, t + width / 2, side="right")
+    num = cy[hi] - cy[lo]
+    den = cw[hi] - cw[lo]
+    return np.where(den > 0, num / np.where(den > 0, den, 1), y)
+
+
+def find_steady(d: Discharge, scene: Scene) -> SteadyState:
+    """Locate the stationary regime of Q(t) and average over it."""
+    T = scene.time_scale
+    t, q = d.time, d.mass_flow
+    area = scene.cross_section_area  # volume / area: the equivalent fill height
+    h_eq = d.volume / area
+    usable = (t > 0.5 * T) & (h_eq > LOW_FILL * scene.silo.width)
+    nan = SteadyState(False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
+    if usable.sum() < 20:
+        nan.reason = (
+            "run too short (or silo emptied): fewer than 20 usable steps after 0.5 sqrt(L/g)"
+        )
+        return nan
+    idx = np.flatnonzero(usable)
+    i1 = idx[-1]
+    tt, qq = t[: i1 + 1], q[: i1 + 1]
+    width = 0.5 * T
+    smooth = _smooth(tt, qq, width)
+    later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
+    q_ref = float(np.median(qq[later]))
+    # the window opens when the smoothed rate first comes within the band of
+    # the plateau (the end of the start-up transient) and no longer leaves
+    # the wider excursion band: an overshooting start-up crosses the plateau
+    # before it settles, while a noisy plateau wanders a little (2-5%) and
+    # must not push the start back. Only complete smoothing windows are
+    # judged for excursions (the last half-width is averaged short).
+    dev = np.abs(smooth - q_ref)
+    usable_now = tt >= tt[idx[0]]
+    near = np.flatnonzero((dev <= STEADY_TOLERANCE * abs(q_ref)) & usable_now)
+    i0 = int(near[0]) if near.size else i1
+    judged = usable_now & (tt <= tt[-1] - width / 2)
+    wild = np.flatnonzero(judged & (dev > STEADY_MAX_EXCURSION * abs(q_ref)))
+    if wild.size and near.size:
+        later_near = near[near > wild[-1]]
+        i0 = int(later_near[0]) if later_near.size else i1
+    win = slice(i0, i1 + 1)
+    tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
+    if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:
+        nan.reason = (
+            f"no stationary regime: the rate reached its plateau (within {STEADY_TOLERANCE:.0%})"
+            f" only {(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(L/g) before the end "
+            "(need >= 1)"
+        )
+        nan.t_start, nan.t_end = float(t[i0]) if i0 < len(t) else math.nan, float(t[i1])
+        return nan
+    mean = float(np.sum(qw * dtw) / np.sum(dtw))
+    std = float(np.sqrt(np.sum((qw - mean) ** 2 * dtw) / np.sum(dtw)))
+    slope = np.polyfit(tw, qw, 1)[0]
+    drift = float(slope * (tw[-1] - tw[0]) / mean) if mean else math.nan
+    # standard error of that drift: the rate's fluctuations are correlated
+    # over about one smoothing width, so the window holds ~span/width
+    # independent samples, not one per time step
+    span = tw[-1] - tw[0]
+    n_eff = max(span / width, 2.0)
+    drift_se = float(std * math.sqrt(12.0 / n_eff) / abs(mean)) if mean else math.nan
+    q_vol = float(-np.polyfit(tw, vw, 1)[0] * d.density)
+    # largest excursion of the smoothed rate, where its window is complete
+    complete = (tt >= tw[0]) & (tt <= tt[-1] - width / 2)
+    band = float(np.max(np.abs(smooth[complete] - mean)) / mean) if complete.any() else 0.0
+    reasons = []
+    # a drift counts when it is both large and more than the noise explains
+    if abs(drift) >= STEADY_MAX_DRIFT and abs(drift) > 2 * drift_se:
+        reasons.append(f"Q drifts by {drift:.1%} over the window (noise: {drift_se:.1%})")
+    if band >= STEADY_MAX_EXCURSION:
+        reasons.append(f"the smoothed rate wanders by {band:.1%}")
+    return SteadyState(
+        not reasons,
+        float(tw[0]),
+        float(tw[-1]),
+        mean,
+        std,
+        q_vol,
+        drift,
+        "; ".join(reasons),
+        band,
+    )

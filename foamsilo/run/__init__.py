@@ -1,0 +1,24 @@
+"""Running siloFoam on a case: the runner (serial or MPI, through PyFoam) and its log monitor."""
+
+from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor, Step
+from foamsilo.run.runner import (
+    ProgressCallback,
+    RunResult,
+    mpi_environment,
+    prepare_decomposition,
+    run_solver,
+    solver_argv,
+)
+
+__all__ = [
+    "LOG_NAME",
+    "STEP_TABLE",
+    "LogMonitor",
+    "ProgressCallback",
+    "RunResult",
+    "Step",
+    "mpi_environment",
+    "prepare_decomposition",
+    "run_solver",
+    "solver_argv",
+]

@@ -1,0 +1,217 @@
+"""siloFoam's log, line by line: one row per time step, and the divergence verdict.
+
+:class:`LogMonitor` keeps, for each time step, the time, the step, the
+Courant numbers, the initial residuals and iteration counts, the continuity
+error and the execution time, and decides whether the run diverged:
+
+* a NaN or Inf in a residual, a Courant number or the time step;
+* a Courant number far above its limit (``COURANT_BLOWUP`` times);
+* a time step collapsed by ``DT_COLLAPSE`` from the largest one so far.
+
+The regular expressions here read the solver's log, never a dictionary.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+COURANT_BLOWUP = 20.0
+DT_COLLAPSE = 1e-4
+LOG_NAME = "log.siloFoam"
+#: One row per time step of the run (written by :meth:`LogMonitor.write_table`)
+STEP_TABLE = "steps.csv"
+
+_FLOAT = r"([-+]?(?:\d+\.?\d*(?:[eE][-+]?\d+)?|nan|inf|-nan|-inf))"
+_RE_TIME = re.compile(r"^Time = " + _FLOAT + r"\s*$")
+_RE_DT = re.compile(r"^deltaT = " + _FLOAT)
+_RE_CO = re.compile(r"^Courant Number mean: " + _FLOAT + r" max: " + _FLOAT)
+_RE_ACO = re.compile(r"^Interface Courant Number mean: " + _FLOAT + r" max: " + _FLOAT)
+_RE_GCO = re.compile(r"^Granular Courant Number max: " + _FLOAT)
+_RE_RES = re.compile(
+    r"^\w+:\s+Solving for (\S+), Initial residual = "
+    + _FLOAT
+    + r", Final residual = "
+    + _FLOAT
+    + r", No Iterations (\d+)"
+)
+_RE_CONT = re.compile(r"^time step continuity errors : sum local = " + _FLOAT)
+_RE_EXEC = re.compile(r"^ExecutionTime = " + _FLOAT + r" s")
+
+
+def _isbad(x: float) -> bool:
+    return not math.isfinite(x)
+
+
+@dataclass
+class Step:
+    """What the log says about one time step."""
+
+    time: float
+    delta_t: float = math.nan
+    courant: float = math.nan
+    interface_courant: float = math.nan
+    granular_courant: float = math.nan
+    residuals: dict[str, float] = field(default_factory=dict)
+    iterations: dict[str, int] = field(default_factory=dict)
+    continuity: float = math.nan
+    execution_time: float = math.nan
+
+
+@dataclass
+class Divergence:
+    """Why and when a run diverged."""
+
+    quantity: str
+    time: float | None
+    detail: str
+
+
+class LogMonitor:
+    """Parse siloFoam's log line by line; detect divergence.
+
+    Parameters
+    ----------
+    max_courant, max_interface_courant, max_granular_courant
+        The limits the run uses (from controlDict); 0 disables a check.
+    """
+
+    def __init__(
+        self,
+        max_courant: float,
+        max_interface_courant: float,
+        max_granular_courant: float = 0.0,
+    ) -> None:
+        self.limits = {
+            "Courant number": max_courant,
+            "interface Courant number": max_interface_courant,
+            "granular Courant number": max_granular_courant,
+        }
+        self.steps: list[Step] = []
+        self.divergence: Divergence | None = None
+        self.fatal: list[str] = []
+        self._in_fatal = False
+        self._pending: dict[str, float] = {}
+        self._max_dt = 0.0
+        self.end_seen = False
+
+    @property
+    def current_time(self) -> float | None:
+        """Latest simulated time reached."""
+        return self.steps[-1].time if self.steps else None
+
+    def _diverge(self, quantity: str, detail: str) -> None:
+        if self.divergence is None:
+            self.divergence = Divergence(quantity, self.current_time, detail)
+
+    def _check_courant(self, name: str, value: float) -> None:
+        limit = self.limits[name]
+        if _isbad(value):
+            self._diverge(name, f"{name} is {value}")
+        elif limit > 0 and value > COURANT_BLOWUP * limit:
+            self._diverge(name, f"{name} {value:.3g} > {COURANT_BLOWUP:g} x limit {limit:g}")
+
+    def feed(self, line: str) -> None:
+        """Consume one log line."""
+        line = line.rstrip()
+        if "FOAM FATAL" in line or "sigFpe::sigHandler" in line or "error::printStack" in line:
+            self._in_fatal = True
+        if self._in_fatal:
+            self.fatal.append(line)
+            return
+        if line == "End":
+            self.end_seen = True
+            return
+        m = _RE_CO.match(line)
+        if m:
+            self._pending["courant"] = float(m.group(2))
+            self._check_courant("Courant number", float(m.group(2)))
+            return
+        m = _RE_ACO.match(line)
+        if m:
+            self._pending["interface_courant"] = float(m.group(2))
+            self._check_courant("interface Courant number", float(m.group(2)))
+            return
+        m = _RE_GCO.match(line)
+        if m:
+            self._pending["granular_courant"] = float(m.group(1))
+            self._check_courant("granular Courant number", float(m.group(1)))
+            return
+        m = _RE_DT.match(line)
+        if m:
+            dt = float(m.group(1))
+            self._pending["delta_t"] = dt
+            if _isbad(dt) or dt <= 0:
+                self._diverge("deltaT", f"time step is {dt}")
+            elif len(self.steps) > 20 and dt < DT_COLLAPSE * self._max_dt:
+                self._diverge("deltaT", f"time step {dt:.3g} s collapsed from {self._max_dt:.3g} s")
+            if len(self.steps) > 5:
+                self._max_dt = max(self._max_dt, dt)
+            return
+        m = _RE_TIME.match(line)
+        if m:
+            step = Step(time=float(m.group(1)))
+            for k, v in self._pending.items():
+                setattr(step, k, v)
+            self._pending = {}
+            self.steps.append(step)
+            return
+        if not self.steps:
+            return
+        step = self.steps[-1]
+        m = _RE_RES.match(line)
+        if m:
+            name, r0 = m.group(1), float(m.group(2))
+            step.residuals.setdefault(name, r0)  # first solve of the step
+            step.iterations[name] = step.iterations.get(name, 0) + int(m.group(4))
+            if _isbad(r0) or _isbad(float(m.group(3))):
+                self._diverge(f"{name} residual", f"{name} residual is {r0}")
+            return
+        m = _RE_CONT.match(line)
+        if m:
+            step.continuity = float(m.group(1))
+            if _isbad(step.continuity):
+                self._diverge("continuity error", f"continuity error is {step.continuity}")
+            return
+        m = _RE_EXEC.match(line)
+        if m:
+            step.execution_time = float(m.group(1))
+
+    def write_table(self, path: Path) -> None:
+        """Write one row per time step (CSV), replaced whole."""
+        names = sorted({k for s in self.steps for k in s.residuals})
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        with open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(
+                [
+                    "time",
+                    "delta_t",
+                    "courant",
+                    "interface_courant",
+                    "granular_courant",
+                    "continuity",
+                    "execution_time",
+                ]
+                + [f"res_{n}" for n in names]
+                + [f"iter_{n}" for n in names]
+            )
+            for s in self.steps:
+                w.writerow(
+                    [
+                        s.time,
+                        s.delta_t,
+                        s.courant,
+                        s.interface_courant,
+                        s.granular_courant,
+                        s.continuity,
+                        s.execution_time,
+                    ]
+                    + [s.residuals.get(n, "") for n in names]
+                    + [s.iterations.get(n, "") for n in names]
+                )
+        os.replace(tmp, path)

@@ -1,0 +1,314 @@
+"""Run siloFoam on a case through PyFoam, serially or with MPI, with a divergence stop.
+
+The solver runs under a :class:`PyFoam.Execution.BasicRunner.BasicRunner`
+subclass; every log line goes to a :class:`~foamsilo.run.monitor.LogMonitor`,
+which keeps one row per time step and decides whether the run diverged. A
+diverged run is stopped at once and reported with
+:class:`~foamsilo.errors.DivergenceError` (quantity, time, last good time
+directory); the case is kept for inspection.
+
+The command line (``siloFoam -case C`` or ``mpirun --n N ... siloFoam -case C
+-parallel``) is built here and handed to PyFoam with its environment written
+into it (:func:`foamsilo.process.shell_line`): ``os.environ`` is never edited,
+and the solver dies with the foamsilo process that started it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import resource
+import shutil
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from foamsilo.case import SCENE_FILE, decompose_dict, processor_dirs, prune_incomplete_times
+from foamsilo.case.times import latest_processor_time, latest_root_time, time_directories
+from foamsilo.errors import (
+    DivergenceError,
+    FoamError,
+    RunInterruptedError,
+    RunTimeLimitError,
+    UsageError,
+)
+from foamsilo.foam import decompose_par, dict_value, reconstruct_par
+from foamsilo.process import shell_line
+from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor
+from foamsilo.scene import load_scene_file
+from foamsilo.solver import SolverBuild
+from foamsilo.toolchain import OpenFOAM
+
+ProgressCallback = Callable[[LogMonitor, float], None]
+
+
+@dataclass
+class RunResult:
+    """Outcome of a solver run.
+
+    Attributes
+    ----------
+    case
+        The case directory.
+    completed
+        The solver reached its end time and printed ``End``.
+    start_time, end_time
+        Simulated times at start and at the end of this run [s].
+    steps
+        Time steps taken in this run.
+    wall_seconds, cpu_seconds
+        Wall and CPU time of the solver process.
+    max_rss_mb
+        Peak resident memory of the solver [MB] (None if unknown).
+    n_procs
+        MPI ranks it ran on (1: serial).
+    """
+
+    case: Path
+    completed: bool
+    start_time: float
+    end_time: float
+    steps: int
+    wall_seconds: float
+    cpu_seconds: float
+    max_rss_mb: float | None
+    n_procs: int = 1
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-friendly form (the ``run`` section of the summary)."""
+        d = asdict(self)
+        d["case"] = str(self.case)
+        return d
+
+
+def _all_local(hostfile: Path | None) -> bool:
+    """Whether every host of an Open MPI hostfile is this machine (no hostfile: yes)."""
+    if hostfile is None:
+        return True
+    local = {"localhost", "127.0.0.1", socket.gethostname(), socket.getfqdn()}
+    for line in Path(hostfile).read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words and words[0] not in local:
+            return False
+    return True
+
+
+def prepare_decomposition(case: Path, of: OpenFOAM, n_procs: int) -> None:
+    """Make ``case`` ready to run on ``n_procs`` ranks (or serially for 1).
+
+    A decomposed case with the right number of ranks is left as it is (a
+    resumed parallel run goes on from the processors' latest time). Anything
+    else is first reconstructed up to its latest time, so that a run can be
+    resumed with another number of ranks, then decomposed afresh.
+    """
+    procs = processor_dirs(case)
+    if procs and len(procs) == n_procs:
+        return
+    if procs:
+        if latest_processor_time(case) > latest_root_time(case):
+            reconstruct_par(of, case, latest_only=True)
+        for pd in procs:
+            shutil.rmtree(pd)
+    if n_procs == 1:
+        return
+    # horizontal slices of equal cell counts (templates/system/decomposeParDict.j2)
+    scene = load_scene_file(case / SCENE_FILE)
+    (case / "system" / "decomposeParDict").write_text(decompose_dict(scene, n_procs))
+    decompose_par(of, case)
+
+
+def mpi_environment(of: OpenFOAM, n_procs: int, hostfile: Path | None) -> dict[str, str]:
+    """Return the solver's environment: OpenFOAM's, plus what Open MPI needs on this machine."""
+    env = of.runtime_env()
+    if n_procs > 1:
+        if hostfile is None and n_procs > (os.cpu_count() or 1):
+            env.setdefault("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        if _all_local(hostfile):
+            # Open MPI refuses to start when it finds no usable remote shell, even
+            # if every rank is local and it would never call one (other hosts do
+            # need ssh: then the user's setting stands)
+            env.setdefault("OMPI_MCA_plm_rsh_agent", shutil.which("false") or "/bin/false")
+    return env
+
+
+def solver_argv(executable: Path, case: Path, n_procs: int, hostfile: Path | None) -> list[str]:
+    """Return the solver's command line: serial, or under mpirun."""
+    argv = [str(executable), "-case", str(case)]
+    if n_procs == 1:
+        return argv
+    mpirun = shutil.which("mpirun") or "mpirun"
+    launcher = [mpirun, "--n", str(n_procs)]
+    if hostfile is not None:
+        launcher += ["--hostfile", str(hostfile)]
+    return [*launcher, *argv, "-parallel"]
+
+
+def run_solver(
+    case: Path,
+    of: OpenFOAM,
+    solver: SolverBuild,
+    *,
+    progress: ProgressCallback | None = None,
+    max_wall_seconds: float | None = None,
+    n_procs: int = 1,
+    hostfile: Path | None = None,
+) -> RunResult:
+    """Run siloFoam in ``case`` through PyFoam, serially or with MPI.
+
+    The run starts from the latest complete time directory (a fresh case:
+    0); time directories a killed run left half-written are removed first.
+    With ``n_procs > 1`` the case is decomposed unless it already is for that
+    many ranks, and the solver runs under mpirun; the processor directories
+    are kept (see :func:`foamsilo.foam.reconstruct_par`).
+
+    Parameters
+    ----------
+    case
+        A case written by :func:`foamsilo.case.create_case`.
+    of
+        OpenFOAM to run with.
+    solver
+        The solver build.
+    progress
+        Called after each time step with the monitor and the end time.
+    max_wall_seconds
+        Stop the solver after this much wall time (a run that crawls on with
+        a shrinking step must not hang a sweep).
+    n_procs
+        MPI ranks (1: serial, no mpirun).
+    hostfile
+        Open MPI hostfile (one host name per line, one line per slot) for
+        runs across machines; the case directory must be visible at the same
+        path on every host.
+
+    Raises
+    ------
+    DivergenceError
+        The run diverged and was stopped; the case is kept.
+    RunTimeLimitError
+        The wall-time limit was reached; the case is kept.
+    RunInterruptedError
+        Ctrl-C (SIGINT); the case is kept for ``--resume``.
+    FoamError
+        The solver failed (fatal error) for another reason.
+    """
+    from PyFoam.Execution.BasicRunner import BasicRunner
+    from PyFoam.RunDictionary.SolutionDirectory import SolutionDirectory
+
+    case = Path(case).resolve()
+    if n_procs < 1:
+        raise UsageError("--np", f"{n_procs} ranks; allowed: an integer >= 1")
+    if hostfile is not None and not Path(hostfile).is_file():
+        raise UsageError("--hostfile", f"{hostfile}: no such file")
+    prune_incomplete_times(case)
+    prepare_decomposition(case, of, n_procs)
+    control = case / "system" / "controlDict"
+    end_time = float(dict_value(control, "endTime"))
+    monitor = LogMonitor(
+        float(dict_value(control, "maxCo", 0.0)),
+        float(dict_value(control, "maxAlphaCo", 0.0)),
+        float(dict_value(control, "maxGranularCo", 0.0)),
+    )
+    start_time = max(latest_root_time(case), latest_processor_time(case), 0.0)
+    parallel = n_procs > 1
+    line = shell_line(
+        solver_argv(solver.executable, case, n_procs, hostfile),
+        mpi_environment(of, n_procs, hostfile),
+    )
+    log = open(case / LOG_NAME, "a" if start_time > 0 else "w")  # noqa: SIM115
+    started = time.perf_counter()
+    timed_out: list[float | None] = []
+
+    class _Runner(BasicRunner):
+        def getSolutionDirectory(self, archive: str | None = None) -> SolutionDirectory:
+            # the case already has case.foam; no second ParaView stub
+            return SolutionDirectory(self.dir, archive=archive, paraviewLink=False, parallel=True)
+
+        def __init__(self, **kw: Any) -> None:
+            super().__init__(**kw)
+            self.run.cmdline = line  # environment and launcher in the line itself
+
+        def lineHandle(self, text: str) -> None:
+            log.write(text + "\n")
+            n_before = len(monitor.steps)
+            monitor.feed(text)
+            if monitor.divergence is not None or (monitor.fatal and len(monitor.fatal) > 40):
+                # serial: SIGKILL, stop now; mpirun: SIGINT, which it passes
+                # on to the ranks (a killed mpirun leaves them running)
+                self.run.interrupt(pass_int=parallel)
+                return
+            if max_wall_seconds and time.perf_counter() - started > max_wall_seconds:
+                if not timed_out:
+                    timed_out.append(monitor.current_time)
+                    self.run.interrupt(pass_int=parallel)
+                return
+            if progress is not None and len(monitor.steps) != n_before:
+                progress(monitor, end_time)
+
+    usage0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    interrupted: list[float] = []
+    old_handler = None
+    try:
+        runner = _Runner(
+            argv=[str(solver.executable), "-case", str(case)],
+            silent=True,
+            noLog=True,
+            writeState=False,
+        )
+
+        # Ctrl-C: the solver (same process group) stops by itself; a SIGINT
+        # sent to this process alone is passed on. Either way Python only
+        # notes it, so that the run ends as an interruption the case can be
+        # resumed from, not as a KeyboardInterrupt in the middle of PyFoam.
+        def _on_sigint(signum: int, frame: Any) -> None:
+            interrupted.append(time.time())
+            with contextlib.suppress(OSError):
+                os.kill(runner.run.threadPid, signal.SIGINT)
+
+        if threading.current_thread() is threading.main_thread():
+            old_handler = signal.signal(signal.SIGINT, _on_sigint)
+        # PyFoam's own messages go to stderr so that --json stdout stays clean
+        with contextlib.redirect_stdout(sys.stderr):
+            data = runner.start()
+            runner.run.join()  # the solver process is reaped: its rusage is final
+    finally:
+        if old_handler is not None:
+            signal.signal(signal.SIGINT, old_handler)
+        log.close()
+    wall = time.perf_counter() - t0
+    usage1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (usage1.ru_utime - usage0.ru_utime) + (usage1.ru_stime - usage0.ru_stime)
+    monitor.write_table(case / STEP_TABLE)
+    rss = data.get("usedMemory")
+
+    interrupted_run = interrupted or data.get("keyboardInterrupt")
+    if interrupted_run and monitor.divergence is None and not timed_out:
+        good = time_directories(case)
+        raise RunInterruptedError(monitor.current_time, good[-1] if good else None, case)
+    if timed_out and monitor.divergence is None:
+        raise RunTimeLimitError(float(max_wall_seconds or 0), timed_out[0], end_time, case)
+    if monitor.divergence is not None:
+        d = monitor.divergence
+        good = time_directories(case)
+        raise DivergenceError(d.quantity, d.time, d.detail, good[-1] if good else None, case)
+    if monitor.fatal or not monitor.end_seen:
+        text = "\n".join(monitor.fatal) or "the solver ended without 'End'"
+        raise FoamError(f"{solver.executable.name} -case {case}", 1, text, case)
+    return RunResult(
+        case=case,
+        completed=True,
+        start_time=start_time,
+        end_time=monitor.current_time or start_time,
+        steps=len(monitor.steps),
+        wall_seconds=wall,
+        cpu_seconds=cpu,
+        max_rss_mb=float(rss) if rss else None,
+        n_procs=n_procs,
+    )

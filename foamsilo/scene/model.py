@@ -1,0 +1,533 @@
+"""The scene model: a validated description of a silo discharge, in SI units.
+
+Every field carries its unit, its allowed range and a one-line description
+(:func:`foamsilo.scene.schema.field_spec`); the derived properties (the
+representation, the viscosity cap, the permeabilities, the scales) are the
+single place where defaults that depend on other fields are resolved.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+from foamsilo.scene.schema import field_spec as _f
+
+GRAVITY = 9.81
+#: Opening angle of an axisymmetric wedge mesh [deg] (OpenFOAM: at most 5)
+WEDGE_ANGLE_DEG = 5.0
+
+Representation = Literal["auto", "planar", "axisymmetric", "3d"]
+
+
+@dataclass(frozen=True)
+class Silo:
+    """Geometry of the silo and its orifice.
+
+    The silo stands on y = 0 with gravity along -y; a 3D silo has its axis
+    (cylinder, hopper) or its wall-to-wall width (rectangular box) along x,
+    its thickness along z.
+    """
+
+    width: float = _f(
+        "silo width L: wall to wall (rectangular), inner diameter (cylindrical), diameter "
+        "of the upper cylindrical section (hopper)",
+        "m",
+        gt=0,
+    )
+    height: float = _f("silo height H, bottom to the open top of the domain", "m", gt=0)
+    fill_height: float = _f("initial height of the granular column", "m", gt=0)
+    orifice_width: float = _f(
+        "orifice size D: slot width (planar), disk diameter, height of a lateral orifice, "
+        "outlet width or diameter of a hopper",
+        "m",
+        gt=0,
+    )
+    shape: Literal["rectangular", "cylindrical", "hopper"] = _f(
+        "rectangular box, flat-bottomed cylinder, or conical (wedge-shaped if planar) hopper "
+        "below a cylindrical section",
+        default="rectangular",
+    )
+    orifice_position: Literal["bottom", "lateral"] = _f(
+        "bottom, or lateral (on the wall at x = +L/2 of a cylinder, x = L of a box)",
+        default="bottom",
+    )
+    orifice_shape: Literal["auto", "circular", "rectangular"] = _f(
+        "auto: circular in a cylinder's bottom or a hopper, rectangular otherwise",
+        default="auto",
+    )
+    orifice_length: float | None = _f(
+        "second side W of a rectangular orifice: across the thickness of a box (default: "
+        "the whole thickness), arc length on a cylinder wall",
+        "m",
+        gt=0,
+        default=None,
+    )
+    orifice_height: float | None = _f(
+        "height of the lower edge of a lateral orifice above the bottom (Zhou: 0.02)",
+        "m",
+        ge=0,
+        default=None,
+    )
+    eccentricity: float = _f(
+        "distance e of a bottom orifice's centre from the silo axis (cylindrical)",
+        "m",
+        ge=0,
+        default=0.0,
+    )
+    hopper_angle: float | None = _f(
+        "hopper half-angle theta_w from the vertical at the outlet",
+        "deg",
+        gt=0,
+        lt=90,
+        default=None,
+    )
+    hopper_angle_upper: float | None = _f(
+        "half-angle Theta_w of an upper cone (two-angle hopper, Gremaud & Matthews Fig. 8)",
+        "deg",
+        gt=0,
+        lt=90,
+        default=None,
+    )
+    transition_width: float | None = _f(
+        "width (diameter) of a two-angle hopper where the wall angle changes",
+        "m",
+        gt=0,
+        default=None,
+    )
+    thickness: float | None = _f(
+        "thickness W of a rectangular silo (a 3D box; a thin planar silo's wall gap for wall "
+        "friction and to turn an air flow in m^3/s into a flow per unit depth)",
+        "m",
+        gt=0,
+        default=None,
+    )
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def resolved_orifice_shape(self) -> Literal["circular", "rectangular"]:
+        """Orifice shape with ``auto`` resolved."""
+        if self.orifice_shape != "auto":
+            return self.orifice_shape
+        if self.shape == "hopper" or (
+            self.shape == "cylindrical" and self.orifice_position == "bottom"
+        ):
+            return "circular"
+        return "rectangular"
+
+    def wall_radius(self, y: float) -> float:
+        """Half-width (radius) of the silo wall at height y [m]."""
+        return float(_interp(y, *zip(*self.profile, strict=True)))
+
+    @property
+    def profile(self) -> list[tuple[float, float]]:
+        """Wall corners (y, half-width) from the bottom to the top."""
+        R = self.width / 2
+        if self.shape != "hopper":
+            return [(0.0, R), (self.height, R)]
+        assert self.hopper_angle is not None
+        r = self.orifice_width / 2
+        pts = [(0.0, r)]
+        y = 0.0
+        if self.hopper_angle_upper is not None and self.transition_width is not None:
+            rt = self.transition_width / 2
+            y += (rt - r) / math.tan(math.radians(self.hopper_angle))
+            pts.append((y, rt))
+            y += (R - rt) / math.tan(math.radians(self.hopper_angle_upper))
+        else:
+            y += (R - r) / math.tan(math.radians(self.hopper_angle))
+        pts.append((y, R))
+        if y < self.height:
+            pts.append((self.height, R))
+        return pts
+
+    @property
+    def cone_height(self) -> float:
+        """Height of the top of the converging section (0 for a flat bottom) [m]."""
+        if self.shape != "hopper":
+            return 0.0
+        return next(y for y, r in self.profile if r >= self.width / 2 - 1e-15)
+
+
+def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:
+    for i in range(len(xs) - 1):
+        if x <= xs[i + 1] or i == len(xs) - 2:
+            t = (x - xs[i]) / (xs[i + 1] - xs[i]) if xs[i + 1] > xs[i] else 0.0
+            return ys[i] + t * (ys[i + 1] - ys[i])
+    return ys[-1]
+
+
+@dataclass(frozen=True)
+class Material:
+    """The granular material and its mu(I) rheology (Zhou et al. eq. 9)."""
+
+    grain_diameter: float = _f("grain diameter d", "m", gt=0)
+    density: float = _f("grain (phase) density rho_p", "kg/m^3", gt=0)
+    mu_s: float = _f("static friction coefficient mu_s", "", ge=0, le=2)
+    delta_mu: float = _f("mu_2 - mu_s", "", ge=0, le=2)
+    i0: float = _f("inertial-number scale I0", "", gt=0, le=10)
+    viscosity_cap: float | None = _f(
+        "viscosity cap eta_max; give this or viscosity_cap_scaled", "Pa s", gt=0, default=None
+    )
+    viscosity_cap_scaled: float | None = _f(
+        "viscosity cap as a multiple of rho_p sqrt(g L^3) (Zhou: 100)", "", gt=0, default=None
+    )
+    pressure_floor: float | None = _f(
+        "floor p_min of the granular pressure in mu(I); default 1e-4 rho_p g L",
+        "Pa",
+        gt=0,
+        default=None,
+    )
+    wall_friction: float | None = _f(
+        "Coulomb friction mu_w on the front and back walls of a thin planar silo "
+        "(Zhou eq. 14; needs silo.thickness)",
+        "",
+        ge=0,
+        le=2,
+        default=None,
+    )
+
+
+@dataclass(frozen=True)
+class Air:
+    """The interstitial / surrounding gas (the light VOF phase)."""
+
+    density: float = _f("gas density rho_f", "kg/m^3", gt=0, default=1.2)
+    viscosity: float = _f("gas dynamic viscosity eta_f", "Pa s", gt=0, default=1.8e-5)
+
+
+@dataclass(frozen=True)
+class Gas:
+    """Gas coupling (Zhou et al. 2019): modes named as the paper names them."""
+
+    mode: Literal["open-top", "closed-top", "injection"] = _f(
+        "open-top: no coupling (no pore pressure at all); closed-top: Q_air = 0, air drawn "
+        "in through the orifice; injection: air injected at the top at Q_air",
+        default="open-top",
+    )
+    q_air: float | None = _f("injected air flow (injection mode)", "m^3/s", gt=0, default=None)
+    q_air_lpm: float | None = _f("injected air flow (injection mode)", "L/min", gt=0, default=None)
+    q_air_scaled: float | None = _f(
+        "injected air flow per unit depth over sqrt(g L^3) (planar scenes, Zhou Fig. 4b)",
+        "",
+        gt=0,
+        default=None,
+    )
+    permeability: float | None = _f(
+        "Darcy permeability kappa_v of the grains; default Ergun at packing_fraction",
+        "m^2",
+        gt=0,
+        default=None,
+    )
+    permeability_scaled: float | None = _f(
+        "Zhou's dimensionless permeability zeta = kappa_v rho_p sqrt(g/L)/eta_f (their "
+        "simulations: 1); replaces permeability",
+        "",
+        gt=0,
+        default=None,
+    )
+    inertial: bool = _f("Forchheimer term (kappa_i, Ergun) on; off: Darcy only", default=True)
+    packing_fraction: float = _f(
+        "volume fraction phi in the Ergun permeabilities", "", gt=0, lt=1, default=0.6
+    )
+    permeability_ratio: float = _f(
+        "how much more permeable the gas region is (Zhou: zeta_inf = 100)",
+        "",
+        ge=1,
+        le=1e6,
+        default=100.0,
+    )
+    taps: tuple[float, ...] = _f(
+        "heights of pore-pressure taps on the silo axis above the floor (each < silo.height); "
+        "their mean pressure over the steady regime is reported",
+        "m",
+        gt=0,
+        default=(),
+    )
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """Mesh resolution and representation."""
+
+    cells_across: int = _f("cells across the silo width L (the paper uses 64)", ge=4, le=2048)
+    representation: Representation = _f(
+        "planar (one cell thick), axisymmetric (wedge), 3d, or auto (cheapest faithful)",
+        default="auto",
+    )
+    top_cell_ratio: float = _f(
+        "height of the topmost cell over the cell width; cells grow geometrically above "
+        "fine_height (1: uniform mesh)",
+        "",
+        ge=1,
+        le=8,
+        default=3.0,
+    )
+    fine_height: float | None = _f(
+        "height up to which cells stay square when graded; default: the silo width",
+        "m",
+        gt=0,
+        default=None,
+    )
+
+
+@dataclass(frozen=True)
+class Run:
+    """Time integration and output."""
+
+    end_time: float = _f("simulated time at which the run stops", "s", gt=0)
+    write_interval: float = _f("interval between written time directories", "s", gt=0)
+    max_courant: float = _f("Courant number limit over all cells", "", gt=0, le=10, default=0.5)
+    max_interface_courant: float = _f(
+        "Courant number limit at the free surface", "", gt=0, le=1, default=0.5
+    )
+    max_granular_courant: float = _f(
+        "Courant number limit over the grains only (0: not used)", "", ge=0, le=10, default=0.0
+    )
+    max_delta_t: float | None = _f(
+        "largest time step (a safety net; the Courant limits set the step); default 0.05 sqrt(L/g)",
+        "s",
+        gt=0,
+        default=None,
+    )
+    n_procs: int = _f("MPI ranks (1: serial)", ge=1, le=4096, default=1)
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """Linear solvers and scheme switches (their defaults' measurements: docs/benchmarks)."""
+
+    u_rel_tol: float = _f(
+        "relative tolerance of the momentum predictor solve (0: solve to u_tolerance)",
+        "",
+        ge=0,
+        lt=1,
+        default=0.01,
+    )
+    u_tolerance: float = _f("absolute tolerance of the momentum solve", "", gt=0, default=1e-9)
+    p_tolerance: float = _f("absolute tolerance of the pressure solve", "", gt=0, default=1e-7)
+    cache_gradients: bool | None = _f(
+        "compute grad(U) once per step for the rheology and the stress; default: on in "
+        "planar and axisymmetric scenes, off in 3D (why: docs/geometry.md)",
+        default=None,
+    )
+    friction_relaxation: float = _f(
+        "weight of the new wall-friction drag coefficient each step (1: none); the drag "
+        "follows the pressure, which follows the drag: thin silos oscillate without it",
+        "",
+        gt=0,
+        le=1,
+        default=0.2,
+    )
+    ddt_correction: bool = _f(
+        "Rhie-Chow ddtCorr in the projection (off: more robust above Courant 0.5)",
+        default=True,
+    )
+    outer_correctors: int | None = _f(
+        "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
+        "latest pressure and strain rate; default: 1 planar, 3 axisymmetric and 3D (why: "
+        "docs/geometry.md)",
+        ge=1,
+        le=20,
+        default=None,
+    )
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A complete, validated silo discharge scene (SI units)."""
+
+    name: str = _f("short name of the scene (used for directory names)")
+    silo: Silo = _f("geometry")
+    material: Material = _f("granular material")
+    mesh: Mesh = _f("mesh")
+    run: Run = _f("run control")
+    description: str = _f("one-line description", default="")
+    air: Air = _f("gas phase", default=Air())
+    numerics: Numerics = _f("linear solvers and scheme switches", default=Numerics())
+    gas: Gas = _f("gas coupling: open top, closed top or injection", default=Gas())
+    gravity: float = _f(
+        "magnitude of the gravitational acceleration", "m/s^2", gt=0, le=100, default=GRAVITY
+    )
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def representation(self) -> Literal["planar", "axisymmetric", "3d"]:
+        """Representation actually used (``auto`` resolved)."""
+        rep = self.mesh.representation
+        if rep != "auto":
+            return rep
+        return self.allowed_representations[0]
+
+    @property
+    def allowed_representations(self) -> list[Literal["planar", "axisymmetric", "3d"]]:
+        """Representations faithful to the silo, cheapest first."""
+        s = self.silo
+        if s.shape == "rectangular":
+            return ["planar", "3d"]
+        if s.shape == "hopper":
+            return ["axisymmetric", "planar", "3d"]
+        centred = s.orifice_position == "bottom" and s.eccentricity == 0.0
+        return ["axisymmetric", "3d"] if centred else ["3d"]
+
+    @property
+    def mesh_fraction(self) -> float:
+        """Fraction of the silo the mesh holds (fluxes and volumes divide by it).
+
+        The depth of the planar slab [m], the wedge's share of the full
+        circle, or 1 in 3D.
+        """
+        rep = self.representation
+        if rep == "planar":
+            return self.cell_size
+        if rep == "axisymmetric":
+            # the wedge's faces are planar: its cross-section is the triangle
+            # r^2 sin(a)/2, not the sector r^2 a/2
+            return math.sin(math.radians(WEDGE_ANGLE_DEG)) / (2 * math.pi)
+        return 1.0
+
+    @property
+    def cross_section_area(self) -> float:
+        """Area of the silo's (upper) cross-section [m^2] (planar: L, per unit depth)."""
+        s = self.silo
+        if self.representation == "planar":
+            return s.width
+        if s.shape == "rectangular":
+            assert s.thickness is not None
+            return s.width * s.thickness
+        return math.pi * s.width**2 / 4
+
+    @property
+    def flow_rate_scale(self) -> tuple[str, float]:
+        """Name and value of the scale Q is made dimensionless with.
+
+        Planar: rho sqrt(g L^3) (Zhou et al. 2019); otherwise the Beverloo
+        scale rho sqrt(g) D^(5/2).
+        """
+        if self.representation == "planar":
+            return "rho sqrt(g L^3)", self.rho_sqrt_gL3
+        rho, D = self.material.density, self.silo.orifice_width
+        return "rho sqrt(g) D^(5/2)", rho * math.sqrt(self.gravity) * D**2.5
+
+    @property
+    def cache_gradients(self) -> bool:
+        """Whether grad(U) is cached (``numerics.cache_gradients`` resolved)."""
+        if self.numerics.cache_gradients is not None:
+            return self.numerics.cache_gradients
+        return self.representation != "3d"
+
+    @property
+    def outer_correctors(self) -> int:
+        """PIMPLE outer iterations (``numerics.outer_correctors`` resolved)."""
+        if self.numerics.outer_correctors is not None:
+            return self.numerics.outer_correctors
+        return 1 if self.representation == "planar" else 3
+
+    @property
+    def eta_max(self) -> float:
+        """Viscosity cap [Pa s]."""
+        m = self.material
+        if m.viscosity_cap is not None:
+            return m.viscosity_cap
+        assert m.viscosity_cap_scaled is not None
+        return m.viscosity_cap_scaled * self.rho_sqrt_gL3
+
+    @property
+    def gas_coupled(self) -> bool:
+        """Whether the scene has a pore pressure (closed top or injection)."""
+        return self.gas.mode != "open-top"
+
+    @property
+    def wall_friction(self) -> bool:
+        """Whether the quasi-2D wall friction term is on."""
+        return bool(self.material.wall_friction)
+
+    @property
+    def q_air_per_depth(self) -> float:
+        """Injected air flow per unit depth of a planar scene [m^2/s] (0: none)."""
+        g = self.gas
+        if g.mode != "injection":
+            return 0.0
+        if g.q_air_scaled is not None:
+            return g.q_air_scaled * math.sqrt(self.gravity * self.silo.width**3)
+        assert self.silo.thickness is not None
+        return self.q_air / self.silo.thickness
+
+    @property
+    def q_air(self) -> float:
+        """Injected air flow [m^3/s] (0: none); planar scaled flows use the thickness."""
+        g = self.gas
+        if g.mode != "injection":
+            return 0.0
+        if g.q_air is not None:
+            return g.q_air
+        if g.q_air_lpm is not None:
+            return g.q_air_lpm * 1e-3 / 60
+        return self.q_air_per_depth * (self.silo.thickness or 1.0)
+
+    @property
+    def permeability(self) -> float:
+        """Darcy permeability kappa_v of the grains [m^2]."""
+        g = self.gas
+        if g.permeability is not None:
+            return g.permeability
+        if g.permeability_scaled is not None:
+            rho = self.material.density
+            return (
+                g.permeability_scaled
+                * self.air.viscosity
+                / (rho * math.sqrt(self.gravity / self.silo.width))
+            )
+        phi, d = g.packing_fraction, self.material.grain_diameter
+        return (1 - phi) ** 3 * d**2 / (150 * phi**2)  # Ergun
+
+    @property
+    def inertial_permeability(self) -> float | None:
+        """Forchheimer permeability kappa_i [m^2] (Ergun), None for Darcy only."""
+        g = self.gas
+        if not g.inertial:
+            return None
+        phi, d = g.packing_fraction, self.material.grain_diameter
+        return (1 - phi) ** 3 * d**2 / (1.75 * phi)
+
+    @property
+    def delta_t_max(self) -> float:
+        """Largest time step [s]."""
+        if self.run.max_delta_t is not None:
+            return self.run.max_delta_t
+        return 0.05 * self.time_scale
+
+    @property
+    def p_min(self) -> float:
+        """Granular pressure floor [Pa]."""
+        if self.material.pressure_floor is not None:
+            return self.material.pressure_floor
+        return 1e-4 * self.material.density * self.gravity * self.silo.width
+
+    @property
+    def rho_sqrt_gL3(self) -> float:
+        """Flow-rate scale rho_p sqrt(g L^3) of a planar silo [kg/(m s)]."""
+        return self.material.density * math.sqrt(self.gravity * self.silo.width**3)
+
+    @property
+    def time_scale(self) -> float:
+        """sqrt(L/g) [s]."""
+        return math.sqrt(self.silo.width / self.gravity)
+
+    @property
+    def cell_size(self) -> float:
+        """Uniform cell size L / cells_across [m]."""
+        return self.silo.width / self.mesh.cells_across
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (TOML-serialisable: None values dropped)."""
+        return drop_none(dataclasses.asdict(self))
+
+
+def drop_none(d: Any) -> Any:
+    """Drop the None values of nested dicts (TOML has no null)."""
+    if isinstance(d, dict):
+        return {k: drop_none(v) for k, v in d.items() if v is not None}
+    return d

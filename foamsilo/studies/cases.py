@@ -1,0 +1,198 @@
+"""Cases of a study as data: read from TOML, run through the pipeline, one row each.
+
+A study (the validation suite, a reproduction, a benchmark) lists its cases
+in a TOML file shipped beside it (:func:`study_table`); :func:`run_rows`
+runs them through :func:`foamsilo.pipeline.run_many` (a fresh case each,
+under the CPU budget) and turns each :class:`~foamsilo.pipeline.Outcome`
+into a row: the outcome in words, Q, the cost, and the time-step history.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from foamsilo.pipeline import Budget, CaseSpec, Outcome, run_many
+from foamsilo.run import STEP_TABLE
+from foamsilo.scene import format_override, load_preset, read_toml
+
+
+def study_table(name: str) -> dict[str, Any]:
+    """Return the TOML table of a study shipped in ``foamsilo/studies/<name>.toml``."""
+    path = Path(str(resources.files("foamsilo.studies") / f"{name}.toml"))
+    return read_toml(path, f"studies/{name}.toml")
+
+
+def overrides(table: dict[str, Any] | None) -> list[str]:
+    """``{"run.end_time": 1.0}`` -> ``["run.end_time=1.0"]``."""
+    return [format_override(k, v) for k, v in (table or {}).items()]
+
+
+def pick(entry: dict[str, Any], key: str, quick: bool) -> Any:
+    """``entry["quick_<key>"]`` in the quick suite when it is given, else ``entry[key]``."""
+    return entry.get(f"quick_{key}", entry.get(key)) if quick else entry.get(key)
+
+
+@dataclass
+class StudyCase:
+    """One case of a study: a label, a preset and its overrides."""
+
+    label: str
+    preset: str
+    sets: list[str] = field(default_factory=list)
+
+    def spec(self, case_dir: Path, limit: float | None) -> CaseSpec:
+        """Return the pipeline's spec: written afresh (a study never reuses an old case)."""
+        load_preset(self.preset, self.sets)  # bad study data fails before anything runs
+        return CaseSpec(
+            case_dir=case_dir,
+            scene=self.preset,
+            overrides=tuple(self.sets),
+            overwrite=True,
+            max_wall_seconds=limit,
+            label=self.label,
+        )
+
+
+def _outcome_words(o: Outcome) -> tuple[str, str]:
+    if o.ok and o.summary is not None:
+        steady = bool(o.summary.get("steady"))
+        return ("steady" if steady else "not steady"), o.summary.get("steady_reason") or ""
+    err = o.error or {}
+    kind = {
+        "DivergenceError": "stopped: diverged",
+        "RunTimeLimitError": "stopped: wall-time limit",
+        "FoamError": "stopped: solver error",
+    }.get(o.status, f"stopped: {o.status}")
+    detail = err.get("output", "")[-600:] if o.status == "FoamError" else err.get("message", "")
+    return kind, detail
+
+
+def step_history(case_dir: Path) -> dict[str, Any]:
+    """Return the steps, time reached, and time-step range and history (thinned) of a run."""
+    table = Path(case_dir) / STEP_TABLE
+    if not table.exists():
+        return {}
+    with open(table, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    ok = [r for r in rows if r["delta_t"] not in ("", "nan")]
+    dts = [float(r["delta_t"]) for r in ok]
+    pick_rows = ok[:: max(1, len(ok) // 300)]
+    return {
+        "steps": len(rows),
+        "t_reached": float(rows[-1]["time"]) if rows else 0.0,
+        "dt_min": min(dts) if dts else None,
+        "dt_max": max(dts) if dts else None,
+        "dt_median": float(np.median(dts)) if dts else None,
+        "dt_history": [[float(r["time"]), float(r["delta_t"])] for r in pick_rows],
+    }
+
+
+def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
+    """One row of a study's table."""
+    word, detail = _outcome_words(o)
+    row: dict[str, Any] = {
+        "label": case.label,
+        "preset": case.preset,
+        "sets": case.sets,
+        "case_dir": str(o.spec.case_dir),
+        "outcome": word,
+        "detail": detail,
+        "wall_s": o.wall_s,
+    }
+    s = o.summary or {}
+    run = s.get("run") or {}
+    row.update(
+        Q=s.get("Q"),
+        Q_std=s.get("Q_std"),
+        Q_dimensionless=s.get("Q_dimensionless"),
+        Q_from_volume=s.get("Q_from_volume"),
+        flux_vs_volume_rel_diff=s.get("flux_vs_volume_rel_diff"),
+        cells=s.get("cells"),
+        cpu_s=run.get("cpu_seconds"),
+        mass_balance=s.get("mass_balance_rel_error"),
+        lost_through_top=s.get("lost_through_top_rel"),
+        fill_height_end_m=s.get("fill_height_end_m"),
+        simulated_time_s=s.get("simulated_time_s"),
+    )
+    row.update(step_history(o.spec.case_dir))
+    scene = load_preset(case.preset, case.sets)
+    row["end_time"] = scene.run.end_time
+    row["thickness"] = scene.silo.thickness
+    return row
+
+
+def run_rows(
+    cases: list[StudyCase],
+    work: Path,
+    jobs: int,
+    limit: float | None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run the cases (``jobs`` at a time, in ``work/NN``); one outcome row each, in order."""
+    specs = [c.spec(Path(work) / f"{i:02d}", limit) for i, c in enumerate(cases)]
+    by_dir = {s.case_dir: c for s, c in zip(specs, cases, strict=True)}
+
+    def done(o: Outcome) -> None:
+        if on_row is not None:
+            on_row(outcome_row(by_dir[o.spec.case_dir], o))
+
+    outcomes = run_many(specs, Budget(cores=jobs), on_done=done)
+    return [outcome_row(c, o) for c, o in zip(cases, outcomes, strict=True)]
+
+
+def machine_info() -> dict[str, Any]:
+    """Where a study ran (read from the machine, written into its report)."""
+    import os
+    import platform
+
+    from foamsilo import __version__
+
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "platform": platform.platform(),
+        "python": platform.python_version(),
+        "foamsilo": __version__,
+        "date": time.strftime("%Y-%m-%d"),
+    }
+
+
+def git_commit() -> str | None:
+    """Return the commit the studies ran at (``-dirty``: uncommitted changes), if any."""
+    import os
+
+    from foamsilo.process import run_command
+
+    def git(*args: str) -> str:
+        res = run_command(["git", *args], env=dict(os.environ), cwd=Path(__file__).parent,
+                          timeout=10)  # fmt: skip
+        return res.output.strip() if res.returncode == 0 else ""
+
+    try:
+        commit = git("rev-parse", "--short", "HEAD")
+        dirty = git("status", "--porcelain", "--untracked-files=no")
+    except OSError:  # no git
+        return None
+    return (commit + ("-dirty" if dirty else "")) or None
+
+
+def fmt(v: Any, spec: str) -> str:
+    """Return a table cell: ``-`` for missing or non-finite values."""
+    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)

@@ -1,0 +1,559 @@
+"""The validation suite: ``foamsilo bench validation [--quick]``.
+
+What a user reads before trusting foamsilo: how close the OpenFOAM path is
+to theory and experiment, what that costs, and where it breaks. Every entry
+runs real siloFoam cases through the pipeline (two at a time on two
+cores) and writes its table and plots into ``docs/validation/``
+(``suite.md``; ``suite-quick.md`` for ``--quick``), each row with the
+resolution, the wall and CPU time, and the error. The cases and the
+tolerances of the checks (each with its reason) are data:
+``foamsilo/studies/suite.toml``. ``--quick`` runs the reduced versions of
+the same entries and fails when a checked figure leaves its tolerance.
+
+Entries
+-------
+``work-precision``
+    The planar silo of Zhou sec. III.B and the axisymmetric lab silo (Zhou
+    Table I) at several resolutions: steady Q against the finest and against
+    the analytic law, wall time, the resolution to pick for 5% and 2%.
+``beverloo``
+    Venier Test 1 (outlets 3 to 12 cm, axisymmetric): the fit W = C (d - f)^2.5
+    with C, f and R^2; and the planar silo against the orifice width, 2D Beverloo.
+``gas-lab``
+    The lab silo with air injected at the top against eq. 23, on Q/Q0.
+``extremes``
+    Stiff and extreme scenes run to the end or stopped with a diagnosis.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from foamsilo.case import write_whole
+from foamsilo.errors import FoamsiloError
+from foamsilo.jsonio import dumps
+from foamsilo.studies.cases import (
+    StudyCase,
+    fmt,
+    git_commit,
+    machine_info,
+    overrides,
+    pick,
+    run_rows,
+    study_table,
+)
+
+Row = dict[str, Any]
+OnRow = Callable[[Row], None] | None
+
+
+@dataclass
+class Check:
+    """A figure of the suite and the range it must stay in (from ``suite.toml``)."""
+
+    entry: str
+    name: str
+    value: float | None
+    low: float
+    high: float
+    why: str
+
+    @property
+    def passed(self) -> bool:
+        """Whether the value is finite and inside [low, high]."""
+        return (
+            self.value is not None
+            and math.isfinite(self.value)
+            and (self.low <= self.value <= self.high)
+        )
+
+
+def _series(entry: dict[str, Any], quick: bool) -> tuple[list[Any], list[StudyCase]]:
+    """Return the values of a series entry and its cases (one per value)."""
+    values = pick(entry, "values", quick)
+    sets = overrides(pick(entry, "set", quick))
+    key = entry["key"]
+    short = key.split(".")[-1]
+    label = {"cells_across": "{v} across", "orifice_width": "{short} {v:g} m"}.get(short, "{v}")
+    cases = [
+        StudyCase(label.format(v=v, short=short), entry["preset"], [f"{key}={v!r}", *sets])
+        for v in values
+    ]
+    return values, cases
+
+
+# ----------------------------------------------------------- work precision
+def _recommend(cells: list[int], err: list[float], level: float) -> int | None:
+    """Coarsest resolution from which every finer one is within ``level`` of the finest."""
+    for i, _ in enumerate(cells[:-1]):
+        if all(e <= level for e in err[i:-1]):
+            return cells[i]
+    return None
+
+
+def work_precision(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Steady Q against resolution and wall time, planar and axisymmetric."""
+    from foamsilo.compare import open_top_law
+    from foamsilo.scene import load_preset
+
+    out: dict[str, Any] = {}
+    for entry in study_table("suite")["work-precision"]:
+        preset = entry["preset"]
+        cells, cases = _series(entry, quick)
+        rows = run_rows(cases, work / preset, jobs, limit, on_row)
+        law_name, q_law = open_top_law(load_preset(preset))
+        q_fin = rows[-1].get("Q")
+        for r, n in zip(rows, cells, strict=True):
+            r["cells_across"] = n
+            q = r.get("Q")
+            r["err_vs_finest"] = abs(q / q_fin - 1) if q and q_fin else None
+            r["err_vs_law"] = q / q_law - 1 if q else None
+        errs = [r["err_vs_finest"] if r["err_vs_finest"] is not None else math.inf for r in rows]
+        out[preset] = {
+            "law": law_name,
+            "Q_law": q_law,
+            "rows": rows,
+            "recommend_5pct": _recommend(cells, errs, 0.05),
+            "recommend_2pct": _recommend(cells, errs, 0.02),
+        }
+    return out
+
+
+# ------------------------------------------------------------------ Beverloo
+def beverloo_fit(d: np.ndarray, w: np.ndarray, exponent: float) -> dict[str, float]:
+    """Fit W = C (d - f)^exponent: linear in d for W^(1/exponent); C, f and R^2."""
+    y = np.asarray(w, float) ** (1.0 / exponent)
+    slope, intercept = np.polyfit(d, y, 1)
+    pred = slope * np.asarray(d) + intercept
+    r2 = 1 - np.sum((y - pred) ** 2) / np.sum((y - y.mean()) ** 2)
+    return {"C": float(slope**exponent), "f": float(-intercept / slope), "R2": float(r2)}
+
+
+def beverloo(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Venier Test 1 outlets (axisymmetric) and the planar silo against the orifice width."""
+    from foamsilo.scene import load_preset
+
+    out: dict[str, Any] = {}
+    for key, entry in study_table("suite")["beverloo"].items():
+        widths, cases = _series(entry, quick)
+        rows = run_rows(cases, work / key, jobs, limit, on_row)
+        for r, w in zip(rows, widths, strict=True):
+            r["orifice_m"] = w
+        out[key] = {"title": entry["title"], "exponent": entry["exponent"], "rows": rows}
+        ok = [r for r in rows if r.get("Q")]
+        if len(ok) >= 3:
+            fit = beverloo_fit(
+                np.array([r["orifice_m"] for r in ok]),
+                np.array([r["Q"] for r in ok]),
+                entry["exponent"],
+            )
+            if entry["exponent"] == 1.5:  # the planar law: C over rho sqrt(g)
+                sc = load_preset(entry["preset"])
+                fit["C_dimensionless"] = fit["C"] / (sc.material.density * sc.gravity**0.5)
+            out[key]["fit"] = fit
+    return out
+
+
+# ---------------------------------------------------------- gas-assisted lab
+def _late_mean(case: Path, skip: float) -> tuple[float | None, float | None]:
+    """Time-weighted mean and std of the orifice rate after ``skip`` seconds (discharge.csv)."""
+    table = case / "discharge.csv"
+    if not table.exists():
+        return None, None
+    data = np.loadtxt(table, delimiter=",", skiprows=1, ndmin=2)
+    t, q = data[:, 0], data[:, 2]
+    dt = np.diff(np.concatenate([[0.0], t]))
+    keep = t > skip
+    if keep.sum() < 20 or t[-1] < 2 * skip:
+        return None, None
+    w = dt[keep]
+    mean = float(np.sum(q[keep] * w) / np.sum(w))
+    return mean, float(np.sqrt(np.sum((q[keep] - mean) ** 2 * w) / np.sum(w)))
+
+
+def gas_lab(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Zhou's cylindrical lab silo with air injected at the top, against eq. 23.
+
+    Each grain size also runs with the open top, and the comparison is made
+    on Q/Q0 (the rate over the open-top rate, Zhou's Fig. 7 axes): the
+    continuum's own Q0 is above eq. 1 (see work-precision), and the ratio
+    isolates the gas. eq. 23 with the Table I constants (phi_o from eq. 2 with
+    xi_phi = 0.83, Ergun permeabilities at phi_o, Forchheimer term on, A = 1).
+    """
+    from foamsilo.analytic.zhou import gas_assisted
+    from foamsilo.scene import load_preset
+
+    entry = study_table("suite")["gas-lab"]
+    preset = entry["preset"]
+    base = overrides(pick(entry, "set", quick))
+    cases, keys = [], []
+    for d in pick(entry, "grain_diameters", quick):
+        size = f"material.grain_diameter={d!r}"
+        cases.append(StudyCase(f"d = {d * 1e6:.0f} um, open top", preset, [*base, size]))
+        keys.append((d, None))
+        for q in pick(entry, "air_flows_lpm", quick):
+            mode = (
+                ["gas.mode='closed-top'"]
+                if q == 0
+                else ["gas.mode='injection'", f"gas.q_air_lpm={q!r}"]
+            )
+            label = f"d = {d * 1e6:.0f} um, Q_air = {q:g} L/min"
+            cases.append(StudyCase(label, preset, [*base, size, *mode]))
+            keys.append((d, q))
+    rows = run_rows(cases, work / "gas-lab", jobs, limit, on_row)
+    skip = entry["skip_time_scales"] * load_preset(preset).time_scale
+    for r in rows:
+        r["Q_mean"], r["Q_mean_std"] = _late_mean(Path(r["case_dir"]), skip=skip)
+    q_open = {d: r.get("Q_mean") for r, (d, q) in zip(rows, keys, strict=True) if q is None}
+    for r, (d, q) in zip(rows, keys, strict=True):
+        r["grain_diameter"], r["q_air_lpm"] = d, q
+        if q is None:
+            continue
+        theory = gas_assisted("cyl-bottom", d, q * 1e-3 / 60)
+        r["eq23_ratio"] = theory.Q_reduced
+        r["sim_ratio"] = r["Q_mean"] / q_open[d] if r.get("Q_mean") and q_open.get(d) else None
+        r["rel_error"] = r["sim_ratio"] / theory.Q_reduced - 1 if r["sim_ratio"] else None
+    return {"rows": rows, "skip_time_scales": entry["skip_time_scales"]}
+
+
+# ------------------------------------------------------------------ extremes
+def extremes(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Stiff and extreme scenes: run to the end or stop with a diagnosis."""
+    table = [e for e in study_table("suite")["extremes"] if e.get("quick") or not quick]
+    cases = [StudyCase(e["label"], e["preset"], overrides(e.get("set"))) for e in table]
+    rows = run_rows(cases, work / "extremes", jobs, limit, on_row)
+    # does the rate depend on the cap? each row against its default-cap twin
+    q = {r["label"]: r.get("Q") for r in rows}
+    for r, e in zip(rows, table, strict=True):
+        ref = q.get(e["twin"]) if e.get("twin") else None
+        r["vs_default_cap"] = r["Q"] / ref - 1 if r.get("Q") and ref else None
+    return {"rows": rows}
+
+
+# --------------------------------------------------------------------- suite
+ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
+    "work-precision": work_precision,
+    "beverloo": beverloo,
+    "gas-lab": gas_lab,
+    "extremes": extremes,
+}
+
+
+def checks(result: dict[str, Any]) -> list[Check]:
+    """Return the suite's figures with their tolerances (``suite.toml`` ``[checks]``)."""
+    tol = study_table("suite")["checks"]
+
+    def check(key: str, name: str, value: float | None) -> Check:
+        t = tol[key]
+        return Check(t["entry"], name, value, float(t["low"]), float(t["high"]), t["why"])
+
+    out: list[Check] = []
+    wp = result.get("work-precision")
+    if wp:
+        for r in wp["zhou-planar"]["rows"]:
+            out.append(
+                check(
+                    "planar-q-star",
+                    f"planar {r['cells_across']} across: Q*",
+                    r.get("Q_dimensionless"),
+                )
+            )
+        axi = wp["zhou-cyl-bottom"]["rows"]
+        q = [r.get("Q") for r in axi]
+        up = 1.0 if all(q) and all(b > a for a, b in zip(q[:-1], q[1:], strict=True)) else 0.0
+        out.append(check("lab-silo-rises", "lab silo: Q rises with resolution", up))
+        for r in axi:
+            out.append(
+                check(
+                    "lab-silo-flux-volume",
+                    f"lab silo, {r['cells_across']} across: |Q flux / Q volume - 1|",
+                    r.get("flux_vs_volume_rel_diff"),
+                )
+            )
+    bev = result.get("beverloo")
+    if bev:
+        out.append(
+            check(
+                "venier-r2",
+                "Venier Test 1: R^2 of W = C (d - f)^2.5",
+                bev["venier"].get("fit", {}).get("R2"),
+            )
+        )
+        out.append(
+            check(
+                "planar-beverloo-c",
+                "planar: C of Q = C rho sqrt(g) (D - f)^1.5",
+                bev["planar"].get("fit", {}).get("C_dimensionless"),
+            )
+        )
+    gl = result.get("gas-lab")
+    if gl:
+        for r in gl["rows"]:
+            if r["q_air_lpm"] == 12.0 and r["grain_diameter"] == 538e-6:
+                value = r["sim_ratio"] / r["eq23_ratio"] if r.get("sim_ratio") else None
+                out.append(
+                    check("gas-lab-538-12", "d = 538 um, 12 L/min: Q/Q0 over eq. 23's", value)
+                )
+    ext = result.get("extremes")
+    if ext:
+        for r in ext["rows"]:
+            done = r["outcome"] in ("steady", "not steady") or r["outcome"].startswith(
+                "stopped: diverged"
+            )
+            out.append(
+                check(
+                    "extremes-outcome",
+                    f"{r['label']}: ran or stopped with a diagnosis",
+                    1.0 if done else 0.0,
+                )
+            )
+    return out
+
+
+def run_suite(
+    quick: bool,
+    out_dir: Path,
+    work_dir: Path,
+    only: list[str] | None = None,
+    jobs: int = 2,
+    limit: float = 900.0,
+    on_row: OnRow = None,
+) -> dict[str, Any]:
+    """Run the suite; write ``suite[-quick].json`` and ``.md`` with plots into ``out_dir``."""
+    names = only or list(ENTRIES)
+    bad = [n for n in names if n not in ENTRIES]
+    if bad:
+        raise FoamsiloError(f"unknown suite entry {bad[0]!r}; valid: " + ", ".join(ENTRIES))
+    stem = "suite-quick" if quick else "suite"
+    result: dict[str, Any] = {}
+    previous = out_dir / f"{stem}.json"
+    if only and previous.exists():
+        # a partial rerun updates its entries in the existing report
+        result = json.loads(previous.read_text())
+        result.pop("checks", None)
+    commits = result.get("commits") or {k: result.get("commit") for k in ENTRIES if k in result}
+    timing = result.get("wall_s", {})
+    result.update({"quick": quick, "machine": machine_info(), "jobs": jobs})
+    for name in names:
+        t0 = time.perf_counter()
+        result[name] = ENTRIES[name](quick, Path(work_dir) / name, jobs, limit, on_row)
+        timing[name] = time.perf_counter() - t0
+        commits[name] = git_commit()
+    result["wall_s"] = timing
+    result["commits"] = commits
+    result["commit"] = ", ".join(sorted(set(commits.values()), key=str))
+    result["checks"] = [{**asdict(c), "passed": c.passed} for c in checks(result)]
+    out_dir.mkdir(parents=True, exist_ok=True)
+    plot_work_precision(result, out_dir / f"{stem}-work-precision.png")
+    plot_beverloo(result, out_dir / f"{stem}-beverloo.png")
+    plot_time_steps(result, out_dir / f"{stem}-time-steps.png")
+    write_whole(out_dir / f"{stem}.json", dumps(result, indent=1) + "\n")
+    write_whole(out_dir / f"{stem}.md", suite_markdown(result, stem))
+    return result
+
+
+# ------------------------------------------------------------------- output
+def plot_work_precision(result: dict[str, Any], path: Path) -> None:
+    """Error against the finest resolution over wall time (work-precision)."""
+    from foamsilo.plots import finish, labelled_loglog, subplots
+
+    wp = result.get("work-precision")
+    if not wp:
+        return
+    fig, ax = subplots(size=(6, 4.2))
+    for preset, data in wp.items():
+        rows = [r for r in data["rows"][:-1] if r.get("err_vs_finest")]
+        labelled_loglog(ax, rows, "wall_s", "err_vs_finest", "cells_across", f"{preset} (N across)")
+    for level in (5, 2):
+        ax.axhline(level, color="0.6", ls=":", lw=1)
+    ax.set_xlabel("wall time per case [s] (one core)")
+    ax.set_ylabel("|Q - Q(finest)| / Q(finest) [%]")
+    finish(fig, ax, path)
+
+
+def plot_beverloo(result: dict[str, Any], path: Path) -> None:
+    """Q against outlet size with the fitted Beverloo laws."""
+    from foamsilo.plots import finish, subplots
+
+    bev = result.get("beverloo")
+    if not bev:
+        return
+    fig, axes = subplots(2, (11, 4.2))
+    for ax, key in zip(axes, bev, strict=False):
+        exp = bev[key].get("exponent", 2.5)
+        unit = "kg/(m s)" if exp == 1.5 else "kg/s"
+        rows = [r for r in bev[key]["rows"] if r.get("Q")]
+        d = np.array([r["orifice_m"] for r in rows])
+        ax.plot(d * 100, [r["Q"] for r in rows], "ko", label="siloFoam, steady Q")
+        fit = bev[key].get("fit")
+        if fit:
+            dd = np.linspace(max(fit["f"], 0.0) + 1e-4, d.max() * 1.1, 100)
+            ax.plot(
+                dd * 100,
+                fit["C"] * (dd - fit["f"]) ** exp,
+                "C3-",
+                label=f"W = C (d - f)^{exp}: C = {fit['C']:.4g}, f = {fit['f'] * 100:.2f} cm, "
+                f"R^2 = {fit['R2']:.4f}",
+            )
+        ax.set_xlabel("outlet size [cm]")
+        ax.set_ylabel(f"Q [{unit}]")
+        ax.set_title(bev[key].get("title", key), fontsize=9)
+    finish(fig, axes, path, legend_size=7)
+
+
+def plot_time_steps(result: dict[str, Any], path: Path) -> None:
+    """Time-step histories of the stiff and extreme cases."""
+    from foamsilo.plots import finish, subplots
+
+    ext = result.get("extremes")
+    if not ext:
+        return
+    fig, ax = subplots(size=(7, 4.5))
+    for r in ext["rows"]:
+        h = np.array(r.get("dt_history") or [])
+        if h.size:
+            ax.semilogy(h[:, 0], h[:, 1], lw=1, label=f"{r['label']}: {r['outcome']}")
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("time step [s]")
+    finish(fig, ax, path, legend_size=6)
+
+
+def suite_markdown(result: dict[str, Any], stem: str) -> str:
+    """Return the suite's report (Markdown)."""
+    m = result["machine"]
+    cmd = "foamsilo bench validation" + (" --quick" if result["quick"] else "")
+    lines = [
+        f"# Validation suite{' (quick)' if result['quick'] else ''}",
+        "",
+        f"`{cmd}` on {m['cpu']}, {m['cores']} cores, {result['jobs']} cases at a time; "
+        f"commit {result['commit']}. Wall time per entry: "
+        + ", ".join(f"{k} {v / 60:.1f} min" for k, v in result["wall_s"].items())
+        + ".",
+        "",
+    ]
+    wp = result.get("work-precision")
+    if wp:
+        lines += [
+            "## Error against run time",
+            "",
+            f"![work precision]({stem}-work-precision.png)",
+            "",
+        ]
+        for preset, data in wp.items():
+            lines += [
+                f"**{preset}** (law: {data['law']}, Q = {data['Q_law']:.5g}); resolution "
+                f"for 5%: {data['recommend_5pct']} across, for 2%: "
+                f"{data['recommend_2pct']} across (against the finest).",
+                "",
+                "| cells across | cells | Q | Q* | vs finest | vs law | wall [s] | CPU [s] | "
+                "steps |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+            ]
+            for r in data["rows"]:
+                lines.append(
+                    f"| {r['cells_across']} | {fmt(r.get('cells'), 'd')} "
+                    f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('Q_dimensionless'), '.4f')} "
+                    f"| {fmt(r.get('err_vs_finest'), '.1%')} "
+                    f"| {fmt(r.get('err_vs_law'), '+.1%')} | {fmt(r.get('wall_s'), '.0f')} "
+                    f"| {fmt(r.get('cpu_s'), '.0f')} | {fmt(r.get('steps'), 'd')} |"
+                )
+            lines.append("")
+    bev = result.get("beverloo")
+    if bev:
+        lines += ["## Beverloo scaling", "", f"![Beverloo]({stem}-beverloo.png)", ""]
+        for key in bev:
+            title = bev[key].get("title", key)
+            fit = bev[key].get("fit") or {}
+            lines += [
+                f"**{title}**: C = {fmt(fit.get('C'), '.4g')}, f = "
+                f"{fmt(fit.get('f'), '.4f')} m, R² = {fmt(fit.get('R2'), '.4f')}"
+                + (f", C/(ρ√g) = {fit['C_dimensionless']:.3f}" if "C_dimensionless" in fit else "")
+                + ".",
+                "",
+                "| outlet [m] | Q | Q std | outcome | wall [s] |",
+                "| --- | --- | --- | --- | --- |",
+            ]
+            for r in bev[key]["rows"]:
+                lines.append(
+                    f"| {r['orifice_m']:g} | {fmt(r.get('Q'), '.5g')} "
+                    f"| {fmt(r.get('Q_std'), '.2g')} | {r['outcome']} "
+                    f"| {fmt(r.get('wall_s'), '.0f')} |"
+                )
+            lines.append("")
+    ext = result.get("extremes")
+    if ext:
+        lines += [
+            "## Stiff and extreme cases",
+            "",
+            f"![time steps]({stem}-time-steps.png)",
+            "",
+            "| case | outcome | Q | vs default cap | steps | Δt min – max [s] | wall [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for r in ext["rows"]:
+            lines.append(
+                f"| {r['label']} | {r['outcome']} | {fmt(r.get('Q'), '.5g')} "
+                f"| {fmt(r.get('vs_default_cap'), '+.1%')} | {fmt(r.get('steps'), 'd')} "
+                f"| {fmt(r.get('dt_min'), '.2g')} – {fmt(r.get('dt_max'), '.2g')} "
+                f"| {fmt(r.get('wall_s'), '.0f')} |"
+            )
+        lines += [""] + [
+            f"* **{r['label']}**: {r['detail']}" for r in ext["rows"] if r.get("detail")
+        ]
+        lines.append("")
+    gl = result.get("gas-lab")
+    if gl:
+        lines += [
+            "## Gas-assisted lab silo against eq. 23",
+            "",
+            "Zhou Table I cylinder, axisymmetric. Q: the time mean of the orifice rate after "
+            f"{gl.get('skip_time_scales', 1.5):g} sqrt(L/g), with its standard deviation (a "
+            "gas-driven rate is judged by its mean, not by the steady criterion); Q/Q0 "
+            "against the same grains with the open top, compared with eq. 23 (Table I "
+            "constants, A = 1).",
+            "",
+            "| case | Q [kg/s] | Q/Q0 simulated | Q/Q0 eq. 23 | difference | wall [s] |",
+            "| --- | --- | --- | --- | --- | --- |",
+        ]
+        for r in gl["rows"]:
+            q = f"{fmt(r.get('Q_mean'), '.4g')} ± {fmt(r.get('Q_mean_std'), '.2g')}"
+            lines.append(
+                f"| {r['label']} | {q} | {fmt(r.get('sim_ratio'), '.3f')} "
+                f"| {fmt(r.get('eq23_ratio'), '.3f')} | {fmt(r.get('rel_error'), '+.1%')} "
+                f"| {fmt(r.get('wall_s'), '.0f')} |"
+            )
+        notes = [
+            f"* **{r['label']}**: {r['outcome']}: {r['detail']}"
+            for r in gl["rows"]
+            if r.get("detail") and r.get("Q_mean") is None
+        ]
+        lines += ["", *notes, ""]
+    lines += [
+        "## Checks",
+        "",
+        "| entry | figure | value | allowed | why | |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for c in result["checks"]:
+        lines.append(
+            f"| {c['entry']} | {c['name']} | {fmt(c['value'], '.4g')} "
+            f"| [{c['low']:g}, {c['high']:g}] | {c['why']} "
+            f"| {'pass' if c['passed'] else '**FAIL**'} |"
+        )
+    return "\n".join(lines) + "\n"
