@@ -94,6 +94,7 @@ _LAW_NAMES = {
     "beverloo-2d": f"2D Beverloo, C = {beverloo_2d_constant():.2f}",
     "zhou-eq1": "Zhou et al. eq. 1 (Table I)",
     "eq23": f"eq. 23, A = {A_PAPER}",
+    "feeder": "the feeder's rate",
 }
 
 
@@ -189,16 +190,21 @@ class Reference:
 def references(scene: Scene) -> list[Reference]:
     """Return the rates that apply to a scene (what ``compare`` and the plots use).
 
+    A feeder scene: the feeder's rate.
     Gas-coupled scenes: eq. 23 (A = 0.68, Q0 from the open-top law); open-top
     planar scenes: the 2D Beverloo law, and Zhou's converged 0.16 for their
     D = L/4 silo without wall friction; cylinders with a centred bottom
     orifice: Zhou eq. 1. Other shapes have none.
     """
+    planar = scene.representation == "planar"
+    feeder = scene.silo.feeder_flow_rate
+    if feeder is not None:  # the discharge is what the feeder draws
+        q = scene.material.density * (feeder / (scene.silo.thickness or 1.0) if planar else feeder)
+        return [Reference("feeder", f"the feeder, {feeder * 3600:.4g} m^3/h", q)]
     try:
         law, q_open = open_top_law(scene)
     except FoamsiloError:
         return []
-    planar = scene.representation == "planar"
     if scene.gas_coupled:
         q_air = scene.q_air_per_depth if planar else scene.q_air
         q = eq23(scene, q_open, q_air, A_PAPER)
@@ -362,8 +368,9 @@ def compare_runs(
         planar = sc.representation == "planar"
         q_air = sc.q_air_per_depth if planar else sc.q_air
         units = "kg/(m s)" if planar else "kg/s"
+        feeder = [ref for ref in references(sc) if ref.key == "feeder"]
         try:
-            law, q_open = open_top_law(sc)
+            law, q_open = ("feeder", feeder[0].q) if feeder else open_top_law(sc)
         except FoamsiloError as exc:
             skipped.append({"case": str(r.case), "reason": str(exc)})
             continue
@@ -473,7 +480,11 @@ def plot_comparison(points: list[Point], scenes: list[Scene], path: Path) -> Pat
             ds = np.array([p.orifice_width for p, _ in group])
             lo, hi = 0.6 * ds.min(), 1.25 * ds.max()
             dd = np.linspace(lo, hi, 100)
-            ax.plot(dd * 1e3, [open_top_law(sc0, x)[1] for x in dd], "k-", label=_LAW_NAMES[p0.law])
+            if p0.law == "feeder":  # the rate the feeder imposes, whatever D
+                ax.axhline(p0.q_law, color="k", label=_LAW_NAMES[p0.law])
+            else:
+                ax.plot(dd * 1e3, [open_top_law(sc0, x)[1] for x in dd], "k-",
+                        label=_LAW_NAMES[p0.law])  # fmt: skip
             ax.errorbar(
                 ds * 1e3,
                 [p.q for p, _ in group],

@@ -135,6 +135,10 @@ class DivergenceError(FoamsiloError):
         Name of the last complete time directory, or None.
     case_dir
         The case, kept for inspection.
+    delta_t
+        The time step the run was taking when it diverged [s] (None: unknown).
+    recoveries
+        The recoveries tried before it was given up (see :mod:`foamsilo.pipeline`).
     """
 
     def __init__(
@@ -144,12 +148,15 @@ class DivergenceError(FoamsiloError):
         detail: str,
         last_good_time: str | None,
         case_dir: Path,
+        delta_t: float | None = None,
     ) -> None:
         self.quantity = quantity
         self.time = time
         self.detail = detail
         self.last_good_time = last_good_time
         self.case_dir = case_dir
+        self.delta_t = delta_t
+        self.recoveries: list[dict[str, object]] = []
         t = f"t = {time:.6g} s" if time is not None else "start-up"
         super().__init__(
             f"run diverged: {quantity} at {t} ({detail}); last good time directory: "

@@ -62,7 +62,7 @@ from foamsilo.post import reduce_case
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
 from foamsilo.run import ProgressCallback, RunResult, run_solver
-from foamsilo.scene import is_scene_file, load_scene, load_scene_file, scene_digest
+from foamsilo.scene import Scene, is_scene_file, load_scene, load_scene_file, scene_digest
 from foamsilo.solver import ensure_solver
 from foamsilo.summary import RunSummary, write_summary
 from foamsilo.toolchain import OpenFOAM, find_openfoam
@@ -208,6 +208,52 @@ def _record(case_dir: Path, status: str, **data: Any) -> None:
     write_whole(case_dir / RUN_RECORD, dumps({"status": status, **data}) + "\n")
 
 
+#: A recovery caps the step at this fraction of the step the run diverged with
+RECOVERY_STEP_FACTOR = 0.5
+
+
+def _recover(
+    case_dir: Path, exc: DivergenceError, k: int, scene: Scene, say: Say
+) -> dict[str, Any]:
+    """Set a diverged case back to its latest complete time with a smaller step cap.
+
+    The time directory of the step that blew up (if it was a write time) is
+    removed; ``maxDeltaT`` in ``controlDict`` becomes ``RECOVERY_STEP_FACTOR``
+    times the step the run was taking. The recovery is said, appended to the
+    solver's log, and returned for ``run.json``.
+    """
+    from foamsilo.case.times import remove_times_from
+    from foamsilo.foam import dict_value, edit_dict
+    from foamsilo.run import LOG_NAME
+
+    control = case_dir / "system" / "controlDict"
+    cap = float(dict_value(control, "maxDeltaT"))
+    step = exc.delta_t if exc.delta_t else cap
+    new_cap = RECOVERY_STEP_FACTOR * min(step, cap)
+    if exc.time is not None:
+        remove_times_from(case_dir, exc.time)
+    with edit_dict(control) as cd:
+        cd["maxDeltaT"] = new_cap
+        cd["deltaT"] = min(float(cd["deltaT"]), new_cap)
+    restart = inspect(case_dir).latest_time or "0"
+    line = (
+        f"foamsilo: recovery {k} of {scene.run.max_recoveries}: {exc.quantity} diverged at "
+        f"t = {exc.time} s with steps of {step:.3g} s; restarting from t = {restart} s with "
+        f"the step capped at {new_cap:.3g} s"
+    )
+    say(line.removeprefix("foamsilo: "))
+    with open(case_dir / LOG_NAME, "a") as log:
+        log.write(line + "\n")
+    return {
+        "quantity": exc.quantity,
+        "time": exc.time,
+        "detail": exc.detail,
+        "delta_t": step,
+        "restart_time": float(restart),
+        "max_delta_t": new_cap,
+    }
+
+
 def _error_record(exc: BaseException) -> dict[str, Any]:
     out: dict[str, Any] = {"type": type(exc).__name__, "message": str(exc)}
     for k in ("quantity", "time", "last_good_time"):
@@ -267,35 +313,40 @@ def run(
         elif status.latest_time:
             say(f"resuming from t = {status.latest_time} s")
         _record(case_dir, "running", n_procs=ranks, pid=os.getpid())
-        try:
-            result = run_solver(
-                case_dir,
-                of,
-                solver,
-                progress=progress,
-                n_procs=ranks,
-                hostfile=hostfile,
-                max_wall_seconds=max_wall_seconds,
-            )
-        except RunInterruptedError as exc:
-            _record(case_dir, "interrupted", n_procs=ranks, error=_error_record(exc))
-            raise
-        except DivergenceError as exc:
-            _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc))
-            raise
-        except RunTimeLimitError as exc:
-            _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(exc))
-            raise
-        except (FoamError, FoamsiloError) as exc:
-            _record(case_dir, "failed", n_procs=ranks, error=_error_record(exc))
-            raise
-        except KeyboardInterrupt:
-            _record(case_dir, "interrupted", n_procs=ranks)
-            raise
+        recoveries: list[dict[str, Any]] = []
+        while True:
+            try:
+                result = run_solver(
+                    case_dir, of, solver, progress=progress, n_procs=ranks, hostfile=hostfile,
+                    max_wall_seconds=max_wall_seconds, append_log=bool(recoveries),
+                )  # fmt: skip
+                break
+            except DivergenceError as exc:
+                if len(recoveries) >= scene.run.max_recoveries:
+                    exc.recoveries = recoveries
+                    _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc),
+                            recoveries=recoveries)  # fmt: skip
+                    raise
+                recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say))
+            except RunInterruptedError as exc:
+                _record(case_dir, "interrupted", n_procs=ranks, error=_error_record(exc),
+                        recoveries=recoveries)  # fmt: skip
+                raise
+            except RunTimeLimitError as exc:
+                _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(exc),
+                        recoveries=recoveries)  # fmt: skip
+                raise
+            except (FoamError, FoamsiloError) as exc:
+                _record(case_dir, "failed", n_procs=ranks, error=_error_record(exc),
+                        recoveries=recoveries)  # fmt: skip
+                raise
+            except KeyboardInterrupt:
+                _record(case_dir, "interrupted", n_procs=ranks, recoveries=recoveries)
+                raise
         if reconstruct and ranks > 1:
             say("reconstructing the processor directories")
             reconstruct_par(of, case_dir)
-        _record(case_dir, "finished", **result.as_dict())
+        _record(case_dir, "finished", **result.as_dict(), recoveries=recoveries)
     return result
 
 

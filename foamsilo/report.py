@@ -168,6 +168,15 @@ def case_report(summary: RunSummary) -> Path:
             f"{_fmt(run.get('cpu_seconds'), '.1f')} s CPU on {run.get('n_procs', 1)} rank(s).",
             "",
         ]
+        for k, r in enumerate(run.get("recoveries") or [], start=1):
+            out.append(
+                f"* recovery {k}: {r['quantity']} diverged at t = {_fmt(r['time'], '.6g')} s "
+                f"(steps of {_fmt(r['delta_t'], '.3g')} s); restarted from t = "
+                f"{_fmt(r['restart_time'], '.6g')} s with the step capped at "
+                f"{_fmt(r['max_delta_t'], '.3g')} s"
+            )
+        if run.get("recoveries"):
+            out.append("")
     path = case / REPORT_MD
     write_whole(path, "\n".join(out))
     return path

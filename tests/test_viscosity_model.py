@@ -83,3 +83,18 @@ def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
     rising = inertial > 0.1
     assert rising.sum() > 20 and np.all(mu_eff[rising] > m.mu_s + 0.05)
     assert mu_eff.max() < m.mu_s + m.delta_mu
+
+
+def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoam, solver):
+    """muICoeffs.pName naming no field used to run the whole case at the cap, silently."""
+    from foamsilo.foam import edit_dict
+
+    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01})
+    case = create_case(scene, tmp_path / "pname", openfoam).path
+    with edit_dict(case / "constant" / "transportProperties") as tp:
+        tp["granular"]["muICoeffs"]["pName"] = "pGranular"
+    from foamsilo.errors import FoamError
+
+    with pytest.raises(FoamError) as err:
+        run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    assert "pGranular" in err.value.output and "muICoeffs.pName" in err.value.output

@@ -131,7 +131,7 @@ def _make_parents(path: Path, option: str) -> list[Path]:
     missing.reverse()
     try:
         for p in missing:
-            p.mkdir()
+            p.mkdir(exist_ok=True)  # another process may make it at the same moment
     except OSError as exc:
         _remove_created(missing)
         raise UsageError(option, f"cannot create {path.parent}: {exc.strerror}") from None

@@ -114,3 +114,69 @@ def remove_results(case: Path) -> None:
             shutil.rmtree(p)
     for pd in processor_dirs(case):
         shutil.rmtree(pd)
+
+
+#: Fields whose values a restart takes over; a NaN or Inf in one poisons the run
+CHECKED_FIELDS = ("U", "p_rgh", "alpha.granular")
+#: Suffix of a time directory set aside because its fields hold NaN or Inf
+NONFINITE_SUFFIX = ".nonfinite"
+
+
+def nonfinite_fields(tdir: Path) -> list[str]:
+    """Return the restart fields of a time directory that hold NaN or Inf (empty: none)."""
+    import numpy as np
+
+    from foamsilo.errors import FoamsiloError
+    from foamsilo.foam import read_internal_field
+
+    bad = []
+    for name in CHECKED_FIELDS:
+        path = Path(tdir) / name
+        if not path.is_file():
+            continue
+        try:
+            values = read_internal_field(path)
+        except FoamsiloError:
+            bad.append(name)  # unreadable is as bad as NaN for a restart
+            continue
+        if not np.all(np.isfinite(values)):
+            bad.append(name)
+    return bad
+
+
+def set_aside_nonfinite_times(case: Path) -> list[str]:
+    """Set aside the latest time directories whose fields hold NaN or Inf.
+
+    Checks the latest complete time after 0 (of the case and of every
+    processor directory); a bad one is renamed ``<time>.nonfinite`` (kept for
+    inspection, invisible to OpenFOAM), and the one before it is checked in
+    turn. Returns the directories set aside (relative to the case).
+    """
+    case = Path(case)
+    removed: list[str] = []
+    roots = [case, *processor_dirs(case)]
+    while True:
+        times = [t for t in time_directories(case) if float(t) > 0]
+        if not times:
+            return removed
+        latest = times[-1]
+        bad = [r / latest for r in roots if (r / latest).is_dir() and nonfinite_fields(r / latest)]
+        if not bad:
+            return removed
+        for r in roots:
+            d = r / latest
+            if d.is_dir():
+                d.rename(d.with_name(d.name + NONFINITE_SUFFIX))
+                removed.append(str(d.relative_to(case)))
+
+
+def remove_times_from(case: Path, time: float) -> list[str]:
+    """Remove the time directories at or after ``time`` (a diverged step may have written one)."""
+    case = Path(case)
+    removed = []
+    for root in [case, *processor_dirs(case)]:
+        for p in time_dirs(root):
+            if float(p.name) > 0 and float(p.name) >= time * (1 - 1e-12):
+                shutil.rmtree(p)
+                removed.append(str(p.relative_to(case)))
+    return removed

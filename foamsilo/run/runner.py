@@ -16,6 +16,7 @@ and the solver dies with the foamsilo process that started it.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import resource
 import shutil
@@ -30,7 +31,12 @@ from pathlib import Path
 from typing import Any
 
 from foamsilo.case import SCENE_FILE, decompose_dict, processor_dirs, prune_incomplete_times
-from foamsilo.case.times import latest_processor_time, latest_root_time, time_directories
+from foamsilo.case.times import (
+    latest_processor_time,
+    latest_root_time,
+    set_aside_nonfinite_times,
+    time_directories,
+)
 from foamsilo.errors import (
     DivergenceError,
     FoamError,
@@ -158,6 +164,7 @@ def run_solver(
     max_wall_seconds: float | None = None,
     n_procs: int = 1,
     hostfile: Path | None = None,
+    append_log: bool = False,
 ) -> RunResult:
     """Run siloFoam in ``case`` through PyFoam, serially or with MPI.
 
@@ -186,6 +193,9 @@ def run_solver(
         Open MPI hostfile (one host name per line, one line per slot) for
         runs across machines; the case directory must be visible at the same
         path on every host.
+    append_log
+        Append to the solver's log even when the run starts at t = 0 (a
+        retry: the log keeps what went before).
 
     Raises
     ------
@@ -207,6 +217,8 @@ def run_solver(
     if hostfile is not None and not Path(hostfile).is_file():
         raise UsageError("--hostfile", f"{hostfile}: no such file")
     prune_incomplete_times(case)
+    # a restart from NaN fields dies in a floating-point trap naming no file
+    set_aside_nonfinite_times(case)
     prepare_decomposition(case, of, n_procs)
     control = case / "system" / "controlDict"
     end_time = float(dict_value(control, "endTime"))
@@ -221,7 +233,7 @@ def run_solver(
         solver_argv(solver.executable, case, n_procs, hostfile),
         mpi_environment(of, n_procs, hostfile),
     )
-    log = open(case / LOG_NAME, "a" if start_time > 0 else "w")  # noqa: SIM115
+    log = open(case / LOG_NAME, "a" if start_time > 0 or append_log else "w")  # noqa: SIM115
     started = time.perf_counter()
     timed_out: list[float | None] = []
 
@@ -297,7 +309,10 @@ def run_solver(
     if monitor.divergence is not None:
         d = monitor.divergence
         good = time_directories(case)
-        raise DivergenceError(d.quantity, d.time, d.detail, good[-1] if good else None, case)
+        # the step before the one that blew up (its own step may be NaN)
+        steps = [s.delta_t for s in monitor.steps[-3:] if math.isfinite(s.delta_t)]
+        dt = min(steps) if steps else None
+        raise DivergenceError(d.quantity, d.time, d.detail, good[-1] if good else None, case, dt)
     if monitor.fatal or not monitor.end_seen:
         text = "\n".join(monitor.fatal) or "the solver ended without 'End'"
         raise FoamError(f"{solver.executable.name} -case {case}", 1, text, case)

@@ -97,6 +97,13 @@ class Silo:
         gt=0,
         default=None,
     )
+    feeder_flow_rate: float | None = _f(
+        "volumetric outflow a feeder imposes at the orifice (Venier et al. Test 2: 8.35 m^3/h "
+        "= 2.32e-3 m^3/s); default: free discharge",
+        "m^3/s",
+        gt=0,
+        default=None,
+    )
     thickness: float | None = _f(
         "thickness W of a rectangular silo (a 3D box; a thin planar silo's wall gap for wall "
         "friction and to turn an air flow in m^3/s into a flow per unit depth)",
@@ -293,6 +300,13 @@ class Run:
         default=None,
     )
     n_procs: int = _f("MPI ranks (1: serial)", ge=1, le=4096, default=1)
+    max_recoveries: int = _f(
+        "times a diverged run goes back to its latest complete time with the step halved "
+        "before it is given up (0: stop at the first divergence)",
+        ge=0,
+        le=20,
+        default=3,
+    )
 
 
 @dataclass(frozen=True)
@@ -433,6 +447,21 @@ class Scene:
             return m.viscosity_cap
         assert m.viscosity_cap_scaled is not None
         return m.viscosity_cap_scaled * self.rho_sqrt_gL3
+
+    @property
+    def feeder_flux(self) -> float:
+        """The feeder's outflow through the orifice patch of this mesh [m^3/s] (0: free).
+
+        Planar: the flow per unit thickness times the slab's depth; a wedge:
+        its share of the full circle; 3D: all of it.
+        """
+        q = self.silo.feeder_flow_rate
+        if q is None:
+            return 0.0
+        if self.representation == "planar":
+            assert self.silo.thickness is not None
+            return q / self.silo.thickness * self.cell_size
+        return q * self.mesh_fraction
 
     @property
     def gas_coupled(self) -> bool:

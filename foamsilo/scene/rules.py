@@ -56,6 +56,18 @@ def validate(scene: Scene) -> None:
             f"got {s.fill_height:g} m; allowed: >= two cells ({2 * scene.cell_size:g} m)",
         )
     _validate_gas(scene)
+    if s.feeder_flow_rate is not None:
+        if scene.gas_coupled:
+            raise SceneError(
+                "silo.feeder_flow_rate",
+                "a feeder with gas coupling is not modelled; allowed with gas.mode 'open-top'",
+            )
+        if scene.representation == "planar" and not s.thickness:
+            raise SceneError(
+                "silo.thickness",
+                "missing: a planar scene needs the silo thickness W to turn the feeder's "
+                "m^3/s into a flow per unit depth",
+            )
     if scene.run.write_interval > scene.run.end_time:
         raise SceneError(
             "run.write_interval",

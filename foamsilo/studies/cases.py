@@ -122,6 +122,7 @@ def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
         lost_through_top=s.get("lost_through_top_rel"),
         fill_height_end_m=s.get("fill_height_end_m"),
         simulated_time_s=s.get("simulated_time_s"),
+        recoveries=len(run.get("recoveries") or []),
     )
     row.update(step_history(o.spec.case_dir))
     scene = load_preset(case.preset, case.sets)
@@ -139,6 +140,7 @@ def run_rows(
 ) -> list[dict[str, Any]]:
     """Run the cases (``jobs`` at a time, in ``work/NN``); one outcome row each, in order."""
     specs = [c.spec(Path(work) / f"{i:02d}", limit) for i, c in enumerate(cases)]
+    Path(work).mkdir(parents=True, exist_ok=True)  # made once, not by racing workers
     by_dir = {s.case_dir: c for s, c in zip(specs, cases, strict=True)}
 
     def done(o: Outcome) -> None:

@@ -22,7 +22,11 @@ Entries
 ``gas-lab``
     The lab silo with air injected at the top against eq. 23, on Q/Q0.
 ``extremes``
-    Stiff and extreme scenes run to the end or stopped with a diagnosis.
+    Stiff and extreme scenes at their defaults, each of which must reach a
+    steady discharge (with the runner's recoveries where it diverges).
+``cap``
+    Q at the lowest and highest viscosity cap (1e2 and 1e5 rho sqrt(g L^3)):
+    planar, axisymmetric, 3D and gas-assisted scenes.
 """
 
 from __future__ import annotations
@@ -242,8 +246,33 @@ def extremes(
     q = {r["label"]: r.get("Q") for r in rows}
     for r, e in zip(rows, table, strict=True):
         ref = q.get(e["twin"]) if e.get("twin") else None
+        r["twin"] = e.get("twin")
         r["vs_default_cap"] = r["Q"] / ref - 1 if r.get("Q") and ref else None
     return {"rows": rows}
+
+
+# ----------------------------------------------------------- cap independence
+def cap_independence(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Each scene at the lowest and the highest viscosity cap of ``suite.toml`` [cap]."""
+    table = study_table("suite")["cap"]
+    entries = [e for e in table["cases"] if e.get("quick") or not quick]
+    caps = table["caps"]
+    cases = [
+        StudyCase(f"{e['label']}, eta_max = {c:g}", e["preset"],
+                  [*overrides(e.get("set")), f"material.viscosity_cap_scaled={c!r}"])
+        for e in entries
+        for c in caps
+    ]  # fmt: skip
+    rows = run_rows(cases, work / "cap", jobs, limit, on_row)
+    pairs = []
+    for k, e in enumerate(entries):
+        lo, hi = rows[len(caps) * k], rows[len(caps) * k + len(caps) - 1]
+        change = hi["Q"] / lo["Q"] - 1 if lo.get("Q") and hi.get("Q") else None
+        pairs.append({"label": e["label"], "caps": caps, "Q": [lo.get("Q"), hi.get("Q")],
+                      "change": change, "outcomes": [lo["outcome"], hi["outcome"]]})  # fmt: skip
+    return {"rows": rows, "pairs": pairs}
 
 
 # --------------------------------------------------------------------- suite
@@ -252,6 +281,7 @@ ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
     "beverloo": beverloo,
     "gas-lab": gas_lab,
     "extremes": extremes,
+    "cap": cap_independence,
 }
 
 
@@ -313,16 +343,16 @@ def checks(result: dict[str, Any]) -> list[Check]:
     ext = result.get("extremes")
     if ext:
         for r in ext["rows"]:
-            done = r["outcome"] in ("steady", "not steady") or r["outcome"].startswith(
-                "stopped: diverged"
-            )
-            out.append(
-                check(
-                    "extremes-outcome",
-                    f"{r['label']}: ran or stopped with a diagnosis",
-                    1.0 if done else 0.0,
-                )
-            )
+            steady = 1.0 if r["outcome"] == "steady" else 0.0
+            out.append(check("extremes-steady", f"{r['label']}: steady at its defaults", steady))
+            if r.get("twin"):
+                out.append(check("extremes-cap", f"{r['label']}: Q against {r['twin']}",
+                                 r.get("vs_default_cap")))  # fmt: skip
+    cap = result.get("cap")
+    if cap:
+        for pair in cap["pairs"]:
+            out.append(check("cap-independence", f"{pair['label']}: Q(1e5)/Q(1e2) - 1",
+                             pair.get("change")))  # fmt: skip
     return out
 
 
@@ -462,8 +492,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 f"{data['recommend_2pct']} across (against the finest).",
                 "",
                 "| cells across | cells | Q | Q* | vs finest | vs law | wall [s] | CPU [s] | "
-                "steps |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+                "steps | recoveries |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             ]
             for r in data["rows"]:
                 lines.append(
@@ -471,7 +501,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                     f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('Q_dimensionless'), '.4f')} "
                     f"| {fmt(r.get('err_vs_finest'), '.1%')} "
                     f"| {fmt(r.get('err_vs_law'), '+.1%')} | {fmt(r.get('wall_s'), '.0f')} "
-                    f"| {fmt(r.get('cpu_s'), '.0f')} | {fmt(r.get('steps'), 'd')} |"
+                    f"| {fmt(r.get('cpu_s'), '.0f')} | {fmt(r.get('steps'), 'd')} "
+                    f"| {fmt(r.get('recoveries'), 'd')} |"
                 )
             lines.append("")
     bev = result.get("beverloo")
@@ -503,13 +534,15 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "",
             f"![time steps]({stem}-time-steps.png)",
             "",
-            "| case | outcome | Q | vs default cap | steps | Δt min – max [s] | wall [s] |",
-            "| --- | --- | --- | --- | --- | --- | --- |",
+            "| case | outcome | Q | vs default cap | steps | recoveries | Δt min – max [s] "
+            "| wall [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
         for r in ext["rows"]:
             lines.append(
                 f"| {r['label']} | {r['outcome']} | {fmt(r.get('Q'), '.5g')} "
                 f"| {fmt(r.get('vs_default_cap'), '+.1%')} | {fmt(r.get('steps'), 'd')} "
+                f"| {fmt(r.get('recoveries'), 'd')} "
                 f"| {fmt(r.get('dt_min'), '.2g')} – {fmt(r.get('dt_max'), '.2g')} "
                 f"| {fmt(r.get('wall_s'), '.0f')} |"
             )
@@ -544,6 +577,22 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             if r.get("detail") and r.get("Q_mean") is None
         ]
         lines += ["", *notes, ""]
+    cap = result.get("cap")
+    if cap:
+        lines += [
+            "## Q against the viscosity cap",
+            "",
+            "| scene | eta_max [rho sqrt(g L^3)] | Q | change | outcomes |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        for pair in cap["pairs"]:
+            caps = " / ".join(f"{c:g}" for c in pair["caps"])
+            qs = " / ".join(fmt(q, ".5g") for q in pair["Q"])
+            lines.append(
+                f"| {pair['label']} | {caps} | {qs} | {fmt(pair.get('change'), '+.2%')} "
+                f"| {' / '.join(pair['outcomes'])} |"
+            )
+        lines.append("")
     lines += [
         "## Checks",
         "",

@@ -39,7 +39,7 @@ void Foam::viscosityModels::muI::readCoeffs()
     muICoeffs_.readEntry("d", d_);
     muICoeffs_.readEntry("etaMax", etaMax_);
     muICoeffs_.readEntry("pMin", pMin_);
-    pName_ = muICoeffs_.getOrDefault<word>("pName", "p");
+    pName_ = muICoeffs_.get<word>("pName");
     viscosityProperties_.readEntry("rho", rho_);
 
     // Ranges: a bad value here would not fail, it would give wrong physics
@@ -70,7 +70,18 @@ Foam::viscosityModels::muI::calcNu() const
 
     if (!pPtr)
     {
-        // No pressure yet: the cap, exact for material at rest
+        // At construction the solver has not made the pressure yet: the
+        // grains start at the cap (exact for material at rest). Once it
+        // runs, a missing field is a misspelt pName: never run a whole case
+        // at the cap without a word.
+        if (U_.time().timeIndex() > U_.time().startTimeIndex())
+        {
+            FatalIOErrorInFunction(muICoeffs_)
+                << "the granular pressure field " << pName_
+                << " (muICoeffs.pName) does not exist; fields: "
+                << U_.db().sortedNames<volScalarField>()
+                << exit(FatalIOError);
+        }
         return tmp<volScalarField>::New
         (
             IOobject
