@@ -119,6 +119,18 @@ def test_unusable_output_paths_are_refused_up_front(tmp_path, output, words):
     assert (tmp_path / "file").read_text() == "a user's file\n"
 
 
+def test_a_directory_that_is_not_a_case_is_refused_as_the_scene(tmp_path):
+    d = tmp_path / "notes"
+    d.mkdir()
+    (d / "todo.txt").write_text("x\n")
+    code, out = cli("run", str(d))
+    assert code == 2 and out["error"]["field"] == "scene"
+    assert "not a foamsilo case" in out["error"]["message"]
+    code, out = cli("post", str(d))
+    assert code == 2 and "not a foamsilo case" in out["error"]["message"]
+    assert sorted(p.name for p in d.iterdir()) == ["todo.txt"]
+
+
 def test_argument_errors_are_json_under_json(capsys):
     assert main(["run", "--json"]) == 2  # the scene is missing
     out = json.loads(capsys.readouterr().out)

@@ -107,15 +107,6 @@ def prune_incomplete_times(case: Path) -> list[str]:
     return removed
 
 
-def remove_results(case: Path) -> None:
-    """Remove every time after 0 (and the processor directories): a run from the start."""
-    for p in time_dirs(case):
-        if float(p.name) > 0:
-            shutil.rmtree(p)
-    for pd in processor_dirs(case):
-        shutil.rmtree(pd)
-
-
 #: Fields whose values a restart takes over; a NaN or Inf in one poisons the run
 CHECKED_FIELDS = ("U", "p_rgh", "alpha.granular")
 #: Suffix of a time directory set aside because its fields hold NaN or Inf
