@@ -314,6 +314,8 @@ def run(
             say(f"resuming from t = {status.latest_time} s")
         _record(case_dir, "running", n_procs=ranks, pid=os.getpid())
         recoveries: list[dict[str, Any]] = []
+        # what every attempt cost: a recovered run's figures cover its last attempt only
+        wall0, cpu0 = time.perf_counter(), _children_cpu()
         while True:
             try:
                 result = run_solver(
@@ -346,8 +348,20 @@ def run(
         if reconstruct and ranks > 1:
             say("reconstructing the processor directories")
             reconstruct_par(of, case_dir)
-        _record(case_dir, "finished", **result.as_dict(), recoveries=recoveries)
+        spent: dict[str, float] = {}
+        if recoveries:
+            spent["wall_seconds_all_attempts"] = time.perf_counter() - wall0
+            spent["cpu_seconds_all_attempts"] = _children_cpu() - cpu0
+        _record(case_dir, "finished", **result.as_dict(), recoveries=recoveries, **spent)
     return result
+
+
+def _children_cpu() -> float:
+    """CPU seconds (user + system) of this process's finished children."""
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 # ----------------------------------------------------------------------------- reduce

@@ -8,6 +8,7 @@ or sweep directory can be copied, zipped or opened in any Markdown viewer
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +47,12 @@ def plot_discharge(summary: RunSummary, path: Path) -> Path:
     if st.steady:
         ax.axvspan(st.t_start / T, st.t_end / T, color="C0", alpha=0.08, label="steady window")
         ax.axhline(st.q / scale, color="C0", ls="--", lw=1, label=f"steady Q = {st.q / scale:.4f}")
+        if math.isfinite(st.q_error):  # the error of the time average, 2 standard errors
+            lo, hi = (st.q - 2 * st.q_error) / scale, (st.q + 2 * st.q_error) / scale
+            band = f"± 2 standard errors of the mean ({2 * st.q_error / st.q:.2%})"
+            ax.fill_between(
+                [st.t_start / T, st.t_end / T], lo, hi, color="C0", alpha=0.25, label=band
+            )
     for k, ref in enumerate(summary.references):
         colour = f"C{k + 1}"
         if ref.spread > 0:
@@ -95,7 +102,8 @@ def case_report(summary: RunSummary) -> Path:
     if s.get("steady"):
         w = s["steady_window_s"]
         out += [
-            f"* steady Q = **{s['Q']:.5g} ± {s['Q_std']:.2g} {units}** "
+            f"* steady Q = **{s['Q']:.5g} {units}**, standard error of the time average "
+            f"{_fmt(s.get('Q_time_error'), '.2g')} (batch means), fluctuation {s['Q_std']:.2g} "
             f"(Q* = {s['Q_dimensionless']:.4f}, scale {s['flow_rate_scale']['name']}), "
             f"mean of the instantaneous rate over t = {w[0]:.3g} to {w[1]:.3g} s;",
             f"* from the decrease of the granular volume: {s['Q_from_volume']:.5g} {units} "
@@ -176,7 +184,13 @@ def case_report(summary: RunSummary) -> Path:
                 f"{_fmt(r['max_delta_t'], '.3g')} s"
             )
         if run.get("recoveries"):
-            out.append("")
+            out += [
+                "",
+                "With the attempts before the last: "
+                f"{_fmt(run.get('wall_seconds_all_attempts'), '.1f')} s wall, "
+                f"{_fmt(run.get('cpu_seconds_all_attempts'), '.1f')} s CPU.",
+                "",
+            ]
     path = case / REPORT_MD
     write_whole(path, "\n".join(out))
     return path

@@ -163,3 +163,55 @@ def test_a_kill_between_the_two_outputs_keeps_the_mass_balance(tmp_path):
     # the step ending at 0.4 carries the outflow of 0.2-0.4: (3 + 4) * 0.1 over 0.2 s
     assert d.volume_flux * depth == pytest.approx([1.0, 2.0, 3.5, 5.0])
     assert d.mass_balance_error < 1e-12
+
+
+def _noisy(sigma: float, corr_steps: int, n: int = 20000, seed: int = 1):
+    """A plateau of 1 with AR(1) noise of standard deviation sigma, correlated over corr_steps."""
+    rng = np.random.default_rng(seed)
+    phi = np.exp(-1.0 / corr_steps)
+    e = np.empty(n)
+    e[0] = rng.normal()
+    for k in range(1, n):
+        e[k] = phi * e[k - 1] + np.sqrt(1 - phi**2) * rng.normal()
+    t = np.arange(1, n + 1) * 1e-3
+    return t, 1.0 + sigma * e, np.full(n, 1e-3), phi
+
+
+@pytest.mark.parametrize("corr_steps", [1, 50])
+def test_batch_means_give_the_error_of_a_correlated_mean(corr_steps):
+    """The standard error of the mean of an AR(1) series is sigma sqrt((1 + phi)/((1 - phi) n)).
+
+    One batch-means estimate (10 batches) scatters by ~1/sqrt(2 x 9) = 24%, so the
+    estimator is judged over 20 realisations: their mean has a spread of ~5%, and the
+    test allows 15% (the estimator's own small bias included: 10 batches of a
+    correlated series underestimate by ~(correlation time / batch span)).
+    """
+    from foamsilo.post.steady import batch_means_error
+
+    errs, exact = [], None
+    for seed in range(20):
+        t, q, dt, phi = _noisy(0.05, corr_steps, n=10000, seed=seed)
+        exact = 0.05 * np.sqrt((1 + phi) / ((1 - phi) * len(t)))
+        errs.append(batch_means_error(t, q, dt))
+    assert np.mean(errs) == pytest.approx(exact, rel=0.15)
+    # the naive error (independent samples) underestimates a correlated one
+    if corr_steps > 1:
+        assert np.mean(errs) > 3 * 0.05 / np.sqrt(len(t))
+
+
+def test_the_window_is_judged_on_the_orifice_time_scale():
+    """A plateau of 2.5 sqrt(D/g) is a steady window; it is shorter than sqrt(L/g)."""
+    scene = load_preset(
+        "zhou-planar", ["silo.width=0.4", "silo.height=0.8", "silo.fill_height=0.7"]
+    )
+    T_d, T_L = scene.discharge_time_scale, scene.time_scale
+    assert T_d < 0.5 * T_L
+    t = np.linspace(1e-4, 3.6 * T_d, 4000)
+    dt = np.diff(np.concatenate([[0.0], t]))
+    q = 1e-3 * (1 - np.exp(-t / (0.05 * T_d)))
+    v0 = scene.silo.width * scene.silo.fill_height
+    d = Discharge(t, dt, q, v0 - np.cumsum(q * dt), v0, 1.0, 1.0)
+    st = find_steady(d, scene)
+    assert st.steady, st.reason
+    assert st.t_end - st.t_start < T_L  # a plateau the silo width's scale would refuse
+    assert st.q == pytest.approx(1e-3, rel=1e-3)

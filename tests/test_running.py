@@ -263,3 +263,6 @@ def test_a_diverged_run_recovers_with_a_smaller_step(tmp_path, solver):
     assert "recovery 1 of 3" in (case / "log.siloFoam").read_text()
     assert "recovery 1" in (case / "report.md").read_text()
     assert s["mass_balance_rel_error"] < 1e-8
+    # the cost of every attempt, not of the last one only
+    assert s["run"]["cpu_seconds_all_attempts"] > s["run"]["cpu_seconds"]
+    assert s["run"]["wall_seconds_all_attempts"] > s["run"]["wall_seconds"]

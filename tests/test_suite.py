@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from foamsilo.studies.suite import _recommend, beverloo_fit, checks
+from foamsilo.studies.suite import _recommend, beverloo_fit, checks, derive_work_precision
 
 
 @pytest.mark.parametrize(("exponent", "C", "f"), [(2.5, 3871.0, 0.0062), (1.5, 1.135e4, 0.0025)])
@@ -23,6 +23,29 @@ def test_recommended_resolution_is_the_coarsest_that_stays_within():
     assert _recommend(cells, err, 0.05) == 24
     assert _recommend(cells, err, 0.02) == 48
     assert _recommend(cells, err, 0.001) is None
+
+
+def test_work_precision_extrapolates_and_projects_the_cost():
+    # Q = 0.034 - 0.3 / N (first order), CPU per simulated second = 1e-4 N^3
+    cells = [36, 48, 72, 96]
+    rows = [
+        {"cells_across": n, "Q": 0.034 - 0.3 / n, "outcome": "steady",
+         "cpu_s": 0.6 * 1e-4 * n**3, "simulated_time_s": 0.6}
+        for n in cells
+    ]  # fmt: skip
+    rows.insert(0, {"cells_across": 24, "Q": None, "outcome": "stopped: diverged"})
+    data = {"Q_law": 0.0208, "rows": rows}
+    derive_work_precision(data)
+    conv = data["convergence"]
+    assert conv["cells"] == cells  # the diverged row is left out
+    assert conv["order"] == pytest.approx(1.0, rel=1e-9)
+    assert conv["extrapolated"] == pytest.approx(0.034, rel=1e-9)
+    assert rows[-1]["err_vs_extrapolated"] == pytest.approx(-0.3 / 96 / 0.034, rel=1e-9)
+    assert rows[0]["err_vs_extrapolated"] is None
+    n1 = 0.3 / 0.034 / 0.01  # where |e| = 1%
+    assert conv["cells_for_1pct"] == pytest.approx(n1, rel=1e-9)
+    assert conv["cost_exponent"] == pytest.approx(3.0, rel=1e-9)
+    assert conv["cpu_per_simulated_s_for_1pct"] == pytest.approx(1e-4 * n1**3, rel=1e-6)
 
 
 def test_checks_flag_a_figure_outside_its_tolerance():

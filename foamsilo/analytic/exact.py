@@ -1,6 +1,7 @@
 """Exact and classical solutions used to verify the solver.
 
-* steady mu(I) flow down an inclined plane (the Bagnold profile);
+* steady mu(I) flow down an inclined plane (the Bagnold profile), and the
+  Newtonian film it becomes at the viscosity cap;
 * hydrostatic and Janssen vertical stress and wall pressure in a silo;
 * Darcy (and Darcy-Forchheimer) flow through a uniform column, and Darcy
   flow into a slit: in a half-plane, and in a planar silo of width L with a
@@ -80,6 +81,19 @@ def bagnold_max_viscosity(
     p = rho * g * math.cos(theta) * depth
     shear = inertial * math.sqrt(p / rho) / d
     return math.tan(theta) * p / shear
+
+
+def newtonian_film_velocity(
+    z: ArrayLike, depth: float, theta: float, nu: float, g: float = GRAVITY
+) -> np.ndarray:
+    """Velocity u(z) of a steady Newtonian film down an inclined plane (no slip, free top).
+
+    u(z) = (g sin theta / nu) (h z - z^2 / 2): the mu(I) layer where the
+    viscosity cap holds throughout (below the yield slope, tan theta < mu_s,
+    the rheology's viscosity mu p / (rho |grad u|) exceeds the film's own).
+    """
+    zz = np.clip(np.asarray(z, dtype=float), 0.0, depth)
+    return np.asarray(g * math.sin(theta) / nu * (depth * zz - zz**2 / 2))
 
 
 # ------------------------------------------------------- silo wall pressures

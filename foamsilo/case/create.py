@@ -18,6 +18,7 @@ import re
 import shutil
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,12 +34,14 @@ from foamsilo.case.lifecycle import (
 )
 from foamsilo.case.templates import render_templates
 from foamsilo.errors import CaseStateError, MeshError, UsageError
-from foamsilo.foam import run_utility, set_alpha_field, topo_set
+from foamsilo.foam import check_mesh, run_utility, set_alpha_field, topo_set
 from foamsilo.mesh import MeshResult, mesh_case
 from foamsilo.scene import Scene, load_scene_file, scene_digest, to_toml
 from foamsilo.toolchain import OpenFOAM
 
 _TMP_MARK = ".foamsilo-tmp-"
+#: Makes a case's mesh (and the field entries of its patches); default: the scene's gmsh mesh
+Mesher = Callable[[Scene, Path, OpenFOAM], MeshResult]
 #: What OpenFOAM accepts in a path: its file names are words without
 #: whitespace, quotes or other characters its parser treats specially
 _FOAM_PATH = re.compile(r"[A-Za-z0-9/._+=@,~%-]*")
@@ -179,6 +182,8 @@ def create_case(
     overwrite: bool = False,
     scene_text: str | None = None,
     dump_geometry: Path | None = None,
+    mesher: Mesher | None = None,
+    metadata: dict[str, Any] | None = None,
 ) -> Case:
     """Write a complete, runnable case for ``scene`` at ``case_dir``.
 
@@ -198,6 +203,13 @@ def create_case(
         default the validated scene is written.
     dump_geometry
         Also write the gmsh geometry there.
+    mesher
+        Makes the mesh instead of the scene's gmsh silo (the verification
+        channel, :mod:`foamsilo.case.channel`), after the templates are
+        rendered and before the initial fill.
+    metadata
+        More entries for ``foamsilo.json`` (what ``rebuild_mesh`` needs to
+        make a mesher's mesh again).
 
     Raises
     ------
@@ -239,7 +251,7 @@ def create_case(
         )
         (tmp / "case.foam").touch()
         try:
-            mesh = mesh_case(scene, tmp, of, dump_geometry)
+            mesh = mesher(scene, tmp, of) if mesher else mesh_case(scene, tmp, of, dump_geometry)
         except MeshError as exc:
             if exc.geometry_file and exc.geometry_file.exists():
                 kept = case_dir.parent / f"{case_dir.name}.failed{exc.geometry_file.suffix}"
@@ -254,6 +266,7 @@ def create_case(
             "representation": scene.representation,
             "cells": mesh.cells,
             "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
+            **(metadata or {}),
         }
         meta["files"] = sorted([*_list_files(tmp), METADATA_FILE])
         (tmp / METADATA_FILE).write_text(json.dumps(meta, indent=2))
@@ -281,9 +294,17 @@ def rebuild_mesh(case_dir: Path, of: OpenFOAM) -> MeshResult:
     its time directories still fit it.
     """
     case_dir = Path(case_dir)
-    read_metadata(case_dir)
+    meta = read_metadata(case_dir)
     scene = load_scene_file(case_dir / SCENE_FILE)
     shutil.rmtree(case_dir / "constant" / "polyMesh", ignore_errors=True)
+    from foamsilo.case.channel import CHANNEL_KEY
+
+    if CHANNEL_KEY in meta:  # a channel: blockMesh from the case's own blockMeshDict
+        from foamsilo.foam import block_mesh
+
+        block_mesh(of, case_dir)
+        return MeshResult(scene.representation, int(meta["cells"]), check_mesh(of, case_dir),
+                          case_dir / "system" / "blockMeshDict", 0.0)  # fmt: skip
     mesh = mesh_case(scene, case_dir, of)
     if scene.gas_coupled:
         run_utility(of, case_dir, "topoSet")

@@ -139,6 +139,16 @@ def decompose_dict(scene: Scene, n_procs: int) -> str:
     return _environment().get_template(name).render(template_name=name, **ctx)
 
 
+def render_template(name: str, scene: Scene, case: Path, **extra: Any) -> Path:
+    """Render one template (``system/blockMeshDict``) into ``case`` with more values."""
+    ctx = {**template_context(scene), **extra}
+    text = _environment().get_template(f"{name}.j2").render(template_name=f"{name}.j2", **ctx)
+    out = case / name
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+    return out
+
+
 def render_templates(scene: Scene, case: Path) -> list[str]:
     """Render the scene's templates into ``case``; return the files written."""
     env = _environment()

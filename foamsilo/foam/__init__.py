@@ -17,6 +17,7 @@ from foamsilo.foam.dictionary import (
 )
 from foamsilo.foam.utilities import (
     CheckMeshResult,
+    block_mesh,
     check_mesh,
     decompose_par,
     gmsh_to_foam,
@@ -32,6 +33,7 @@ from foamsilo.process import CommandResult, run_command, shell_line, tied_to_par
 __all__ = [
     "CheckMeshResult",
     "CommandResult",
+    "block_mesh",
     "check_mesh",
     "decompose_par",
     "dict_value",

@@ -49,6 +49,11 @@ def gmsh_to_foam(of: OpenFOAM, case: Path, msh: Path) -> None:
     run_utility(of, case, "gmshToFoam", str(msh))
 
 
+def block_mesh(of: OpenFOAM, case: Path) -> None:
+    """Make ``constant/polyMesh`` from ``system/blockMeshDict``."""
+    run_utility(of, case, "blockMesh")
+
+
 def set_alpha_field(of: OpenFOAM, case: Path) -> None:
     """Initialise the volume fraction from ``system/setAlphaFieldDict`` (cut cells)."""
     run_utility(of, case, "setAlphaField")

@@ -97,10 +97,15 @@ class Reduction:
             ],
             "Q": finite(st.q),
             "Q_std": finite(st.q_std),
+            # the error of the time average (batch means); a grid error, where a
+            # convergence study gives one, is added in quadrature by the study
+            "Q_time_error": finite(st.q_error),
+            "Q_time_error_batch_span": finite(st.batch_span),
             "Q_from_volume": finite(st.q_from_volume),
             "Q_units": "kg/(m s) per unit depth" if planar else "kg/s",
             "Q_dimensionless": finite(st.q / scale),
             "Q_std_dimensionless": finite(st.q_std / scale),
+            "Q_time_error_dimensionless": finite(st.q_error / scale),
             "Q_from_volume_dimensionless": finite(st.q_from_volume / scale),
             "flux_vs_volume_rel_diff": finite(abs(st.q - st.q_from_volume) / st.q)
             if ok and st.q

@@ -1,8 +1,14 @@
-"""The stationary discharge regime of Q(t) and its rate.
+"""The stationary discharge regime of Q(t), its rate and the error of that rate.
 
 The steady window follows the experiments (Zhou et al. 2019, sec. II.B):
 the mean of the instantaneous rate over the stationary regime, after the
-start-up transient and before the silo runs low.
+start-up transient and before the silo runs low. It is judged on the
+discharge's own time scale, T = sqrt(D/g) (the orifice's, not the silo
+width's: a wide silo's plateau need not outlast sqrt(L/g)). The error of the
+time average is estimated by batch means: the window cut into
+``BATCHES`` equal spans, whose means are nearly independent when each span is
+long against the correlation time of the fluctuations (~T); their standard
+deviation over sqrt(BATCHES) is the standard error of the mean.
 """
 
 from __future__ import annotations
@@ -23,6 +29,14 @@ STEADY_MAX_DRIFT = 0.03
 STEADY_MAX_EXCURSION = 0.05
 #: Window ends when the equivalent fill height drops below this many L
 LOW_FILL = 0.5
+#: The window opens no earlier than this many sqrt(D/g) (the start-up)
+START = 1.0
+#: Width of the moving average judged for the plateau, in sqrt(D/g)
+SMOOTHING = 1.0
+#: Shortest steady window, in sqrt(D/g): two correlation times of Q at least
+MIN_WINDOW = 2.0
+#: Batches of the batch-means error of the time average
+BATCHES = 10
 
 
 @dataclass
@@ -45,6 +59,11 @@ class SteadyState:
         Why it is not steady, when it is not.
     excursion
         Largest deviation of the smoothed rate from its mean in the window.
+    q_error
+        Standard error of the time average ``q`` (batch means).
+    batch_span
+        The span of one batch over the discharge time sqrt(D/g): the error
+        assumes batches longer than the correlation time (~1).
     """
 
     steady: bool
@@ -56,6 +75,8 @@ class SteadyState:
     drift: float
     reason: str = ""
     excursion: float = math.nan
+    q_error: float = math.nan
+    batch_span: float = math.nan
 
 
 def _smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
@@ -70,25 +91,52 @@ def _smooth(t: np.ndarray, y: np.ndarray, width: float) -> np.ndarray:
     return np.where(den > 0, num / np.where(den > 0, den, 1), y)
 
 
+def batch_means_error(
+    t: np.ndarray, q: np.ndarray, dt: np.ndarray, batches: int = BATCHES
+) -> float:
+    """Estimate the standard error of the time-weighted mean of q by batch means.
+
+    Parameters
+    ----------
+    t, q, dt
+        Times, rates and step lengths over the averaging window.
+    batches
+        Number of equal spans the window is cut into.
+
+    Returns
+    -------
+    float
+        Standard deviation of the batch means over sqrt(batches); NaN when a
+        batch holds no step.
+    """
+    edges = np.linspace(t[0], t[-1], batches + 1)
+    which = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, batches - 1)
+    w = np.bincount(which, weights=dt, minlength=batches)
+    if np.any(w <= 0):
+        return math.nan
+    means = np.bincount(which, weights=q * dt, minlength=batches) / w
+    return float(np.std(means, ddof=1) / math.sqrt(batches))
+
+
 def find_steady(d: Discharge, scene: Scene) -> SteadyState:
-    """Locate the stationary regime of Q(t) and average over it."""
-    T = scene.time_scale
+    """Locate the stationary regime of Q(t), average over it, and give the error of the mean."""
+    T = scene.discharge_time_scale
     t, q = d.time, d.mass_flow
     area = scene.cross_section_area  # volume / area: the equivalent fill height
     h_eq = d.volume / area
-    usable = (t > 0.5 * T) & (h_eq > LOW_FILL * scene.silo.width)
+    usable = (t > START * T) & (h_eq > LOW_FILL * scene.silo.width)
     nan = SteadyState(False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     if usable.sum() < 20:
         nan.reason = (
-            "run too short (or silo emptied): fewer than 20 usable steps after 0.5 sqrt(L/g)"
+            f"run too short (or silo emptied): fewer than 20 usable steps after {START:g} sqrt(D/g)"
         )
         return nan
     idx = np.flatnonzero(usable)
     i1 = idx[-1]
     tt, qq = t[: i1 + 1], q[: i1 + 1]
-    width = 0.5 * T
+    width = SMOOTHING * T
     smooth = _smooth(tt, qq, width)
-    later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > 0.5 * T)
+    later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > START * T)
     q_ref = float(np.median(qq[later]))
     # the window opens when the smoothed rate first comes within the band of
     # the plateau (the end of the start-up transient) and no longer leaves
@@ -107,11 +155,11 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
         i0 = int(later_near[0]) if later_near.size else i1
     win = slice(i0, i1 + 1)
     tw, qw, dtw, vw = t[win], q[win], d.delta_t[win], d.volume[win]
-    if len(tw) < 20 or tw[-1] - tw[0] < 1.0 * T:
+    if len(tw) < 20 or tw[-1] - tw[0] < MIN_WINDOW * T:
         nan.reason = (
             f"no stationary regime: the rate reached its plateau (within {STEADY_TOLERANCE:.0%})"
-            f" only {(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(L/g) before the end "
-            "(need >= 1)"
+            f" only {(tw[-1] - tw[0]) / T if len(tw) else 0:.2f} sqrt(D/g) before the end "
+            f"(need >= {MIN_WINDOW:g})"
         )
         nan.t_start, nan.t_end = float(t[i0]) if i0 < len(t) else math.nan, float(t[i1])
         return nan
@@ -145,4 +193,6 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
         drift,
         "; ".join(reasons),
         band,
+        batch_means_error(tw, qw, dtw),
+        span / BATCHES / T,
     )

@@ -546,6 +546,11 @@ class Scene:
         return math.sqrt(self.silo.width / self.gravity)
 
     @property
+    def discharge_time_scale(self) -> float:
+        """sqrt(D/g) [s]: the time of the flow through the orifice, what sets Q's dynamics."""
+        return math.sqrt(self.silo.orifice_width / self.gravity)
+
+    @property
     def cell_size(self) -> float:
         """Uniform cell size L / cells_across [m]."""
         return self.silo.width / self.mesh.cells_across

@@ -108,9 +108,18 @@ def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
         "detail": detail,
         "wall_s": o.wall_s,
     }
-    s = o.summary or {}
+    row.update(summary_fields(o.summary or {}))
+    row.update(step_history(o.spec.case_dir))
+    scene = load_preset(case.preset, case.sets)
+    row["end_time"] = scene.run.end_time
+    row["thickness"] = scene.silo.thickness
+    return row
+
+
+def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
+    """Return the figures of a row taken from a case's summary (``summary.json``)."""
     run = s.get("run") or {}
-    row.update(
+    return dict(
         Q=s.get("Q"),
         Q_std=s.get("Q_std"),
         Q_dimensionless=s.get("Q_dimensionless"),
@@ -123,12 +132,8 @@ def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
         fill_height_end_m=s.get("fill_height_end_m"),
         simulated_time_s=s.get("simulated_time_s"),
         recoveries=len(run.get("recoveries") or []),
+        Q_time_error=s.get("Q_time_error"),
     )
-    row.update(step_history(o.spec.case_dir))
-    scene = load_preset(case.preset, case.sets)
-    row["end_time"] = scene.run.end_time
-    row["thickness"] = scene.silo.thickness
-    return row
 
 
 def run_rows(

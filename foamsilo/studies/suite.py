@@ -53,6 +53,7 @@ from foamsilo.studies.cases import (
     pick,
     run_rows,
     study_table,
+    summary_fields,
 )
 
 Row = dict[str, Any]
@@ -116,21 +117,56 @@ def work_precision(
         cells, cases = _series(entry, quick)
         rows = run_rows(cases, work / preset, jobs, limit, on_row)
         law_name, q_law = open_top_law(load_preset(preset))
-        q_fin = rows[-1].get("Q")
         for r, n in zip(rows, cells, strict=True):
             r["cells_across"] = n
-            q = r.get("Q")
-            r["err_vs_finest"] = abs(q / q_fin - 1) if q and q_fin else None
-            r["err_vs_law"] = q / q_law - 1 if q else None
-        errs = [r["err_vs_finest"] if r["err_vs_finest"] is not None else math.inf for r in rows]
-        out[preset] = {
-            "law": law_name,
-            "Q_law": q_law,
-            "rows": rows,
-            "recommend_5pct": _recommend(cells, errs, 0.05),
-            "recommend_2pct": _recommend(cells, errs, 0.02),
-        }
+        out[preset] = {"law": law_name, "Q_law": q_law, "rows": rows}
+        derive_work_precision(out[preset])
     return out
+
+
+def derive_work_precision(data: dict[str, Any]) -> None:
+    """Add the figures a work-precision series derives from its rows.
+
+    Each row's error against the finest and against the law; the grid
+    convergence of the steady Q (observed order, Richardson extrapolation,
+    GCI, :mod:`foamsilo.post.convergence`) with each row's error against the
+    extrapolated Q; and the cost per simulated second fitted as a power of
+    the cells across, to project the cost of the 2% and 1% resolutions.
+    Recomputed when the report is written again from ``suite.json``.
+    """
+    from foamsilo.post.convergence import grid_convergence
+
+    rows = data["rows"]
+    q_fin = rows[-1].get("Q")
+    for r in rows:
+        q = r.get("Q")
+        r["err_vs_finest"] = abs(q / q_fin - 1) if q and q_fin else None
+        r["err_vs_law"] = q / data["Q_law"] - 1 if q else None
+        r["err_vs_extrapolated"] = None
+    cells = [r["cells_across"] for r in rows]
+    errs = [r["err_vs_finest"] if r["err_vs_finest"] is not None else math.inf for r in rows]
+    data["recommend_5pct"] = _recommend(cells, errs, 0.05)
+    data["recommend_2pct"] = _recommend(cells, errs, 0.02)
+    steady = [r for r in rows if r.get("Q") and r.get("outcome") == "steady"]
+    data["convergence"] = None
+    if len(steady) < 3:
+        return
+    g = grid_convergence([r["cells_across"] for r in steady], [r["Q"] for r in steady])
+    conv = g.as_dict()
+    if g.extrapolated is not None:
+        for r in steady:
+            r["err_vs_extrapolated"] = r["Q"] / g.extrapolated - 1
+    cost = [(r["cells_across"], r["cpu_s"] / r["simulated_time_s"]) for r in steady
+            if r.get("cpu_s") and r.get("simulated_time_s")]  # fmt: skip
+    if len(cost) >= 2:
+        k, c0 = np.polyfit(np.log([n for n, _ in cost]), np.log([c for _, c in cost]), 1)
+        conv["cost_exponent"] = float(k)
+        for key in ("2pct", "1pct"):
+            n = conv[f"cells_for_{key}"]
+            conv[f"cpu_per_simulated_s_for_{key}"] = (
+                float(math.exp(c0) * n**k) if n is not None else None
+            )
+    data["convergence"] = conv
 
 
 # ------------------------------------------------------------------ Beverloo
@@ -388,6 +424,34 @@ def run_suite(
     result["wall_s"] = timing
     result["commits"] = commits
     result["commit"] = ", ".join(sorted(set(commits.values()), key=str))
+    return write_report(result, out_dir, stem)
+
+
+def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
+    """Write the report again from ``suite[-quick].json`` in ``out_dir``; nothing runs.
+
+    The derived figures (errors, grid convergence, checks) are computed
+    again from the rows, so a new analysis reaches results already paid for;
+    a row missing a figure of a later version takes it from its case's
+    ``summary.json`` when the case is still there.
+    """
+    stem = "suite-quick" if quick else "suite"
+    path = out_dir / f"{stem}.json"
+    if not path.is_file():
+        raise FoamsiloError(f"{path}: no suite results to write a report from; run the suite first")
+    result = json.loads(path.read_text())
+    for data in (result.get("work-precision") or {}).values():
+        for row in data["rows"]:
+            summary = Path(row.get("case_dir", "")) / "summary.json"
+            if "Q_time_error" not in row and summary.is_file():
+                row.update(summary_fields(json.loads(summary.read_text())))
+        derive_work_precision(data)
+    return write_report(result, out_dir, stem)
+
+
+def write_report(result: dict[str, Any], out_dir: Path, stem: str) -> dict[str, Any]:
+    """Check the figures; write the plots, ``<stem>.json`` and ``<stem>.md``; return the result."""
+    result.pop("checks", None)
     result["checks"] = [{**asdict(c), "passed": c.passed} for c in checks(result)]
     out_dir.mkdir(parents=True, exist_ok=True)
     plot_work_precision(result, out_dir / f"{stem}-work-precision.png")
@@ -464,6 +528,33 @@ def plot_time_steps(result: dict[str, Any], path: Path) -> None:
     finish(fig, ax, path, legend_size=6)
 
 
+def _convergence_words(conv: dict[str, Any] | None) -> str:
+    """Return one paragraph on the grid convergence of a work-precision series."""
+    if not conv:
+        return "Grid convergence: fewer than three steady resolutions, no estimate."
+    grids = ", ".join(map(str, conv["cells"][-3:]))
+    head = f"Grid convergence of Q (the three finest steady grids, {grids} across): {conv['kind']}"
+    if conv["kind"] != "monotone":
+        return f"{head}; uncertainty of the finest {fmt(conv['gci'], '.1%')} (half the range)."
+    by_triple = ", ".join(fmt(p, ".2f") for p in conv["orders_by_triple"])
+    parts = [
+        f"{head}, observed order p = {conv['order']:.2f} (each run of three grids: {by_triple}), "
+        f"extrapolated Q = {conv['extrapolated']:.5g}, GCI of the finest {conv['gci']:.1%}."
+    ]
+    for key, level in (("2pct", "2%"), ("1pct", "1%")):
+        n, measured = conv[f"cells_for_{key}"], conv[f"coarsest_within_{key}"]
+        cost = conv.get(f"cpu_per_simulated_s_for_{key}")
+        where = f"measured from {measured} across" if measured else "no measured grid"
+        proj = f"; the error model puts it at {n:.0f} across" if n is not None else ""
+        if cost is not None:
+            proj += (
+                f", a projected {cost:.3g} CPU-s per simulated second (cost ~ N^"
+                f"{conv['cost_exponent']:.2f}, fitted on the rows)"
+            )
+        parts.append(f"Within {level} of the extrapolation: {where}{proj}.")
+    return " ".join(parts)
+
+
 def suite_markdown(result: dict[str, Any], stem: str) -> str:
     """Return the suite's report (Markdown)."""
     m = result["machine"]
@@ -491,20 +582,24 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 f"for 5%: {data['recommend_5pct']} across, for 2%: "
                 f"{data['recommend_2pct']} across (against the finest).",
                 "",
-                "| cells across | cells | Q | Q* | vs finest | vs law | wall [s] | CPU [s] | "
-                "steps | recoveries |",
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+                "| cells across | cells | Q | Q* | vs finest | vs extrapolated | vs law "
+                "| time error | wall [s] | CPU [s] | steps | recoveries |",
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             ]
             for r in data["rows"]:
+                q, qe = r.get("Q"), r.get("Q_time_error")
                 lines.append(
                     f"| {r['cells_across']} | {fmt(r.get('cells'), 'd')} "
-                    f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('Q_dimensionless'), '.4f')} "
+                    f"| {fmt(q, '.5g')} | {fmt(r.get('Q_dimensionless'), '.4f')} "
                     f"| {fmt(r.get('err_vs_finest'), '.1%')} "
-                    f"| {fmt(r.get('err_vs_law'), '+.1%')} | {fmt(r.get('wall_s'), '.0f')} "
+                    f"| {fmt(r.get('err_vs_extrapolated'), '+.1%')} "
+                    f"| {fmt(r.get('err_vs_law'), '+.1%')} "
+                    f"| {fmt(qe / q if q and qe is not None else None, '.2%')} "
+                    f"| {fmt(r.get('wall_s'), '.0f')} "
                     f"| {fmt(r.get('cpu_s'), '.0f')} | {fmt(r.get('steps'), 'd')} "
                     f"| {fmt(r.get('recoveries'), 'd')} |"
                 )
-            lines.append("")
+            lines += ["", _convergence_words(data.get("convergence")), ""]
     bev = result.get("beverloo")
     if bev:
         lines += ["## Beverloo scaling", "", f"![Beverloo]({stem}-beverloo.png)", ""]

@@ -1,0 +1,67 @@
+"""Grid convergence (observed order, Richardson extrapolation, GCI) on exact series.
+
+A series phi(n) = phi_inf + C n^-p is what the procedure assumes; on it the
+order and the extrapolation must come back to round-off, with equal and with
+unequal refinement ratios (the suite's 36, 48, 72, 96 across).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from foamsilo.errors import FoamsiloError
+from foamsilo.post.convergence import grid_convergence
+
+
+def series(cells, p, phi_inf=0.034, c=-0.3):
+    return [phi_inf + c * n ** (-p) for n in cells]
+
+
+@pytest.mark.parametrize("cells", [[10, 20, 40, 80], [36, 48, 72, 96], [16, 24, 32, 48, 64, 96]])
+@pytest.mark.parametrize("p", [1.0, 1.5, 2.0])
+def test_exact_series_recovered(cells, p):
+    g = grid_convergence(cells, series(cells, p))
+    assert g.kind == "monotone"
+    assert g.order == pytest.approx(p, rel=1e-9)
+    assert g.extrapolated == pytest.approx(0.034, rel=1e-9)
+    assert all(o == pytest.approx(p, rel=1e-9) for o in g.orders_by_triple)
+    # the GCI is 1.25 times the finest grid's true error (relative to its own value)
+    fine = series(cells, p)[-1]
+    assert g.gci == pytest.approx(1.25 * abs(fine - 0.034) / abs(fine), rel=1e-9)
+
+
+def test_resolution_for_a_level():
+    cells = [36, 48, 72, 96]
+    g = grid_convergence(cells, series(cells, 1.0))
+    # |e(n)| = 0.3 / (0.034 n): 1% at n = 0.3 / 0.034 / 0.01 = 882
+    assert g.cells_for(0.01) == pytest.approx(0.3 / 0.034 / 0.01, rel=1e-9)
+    assert g.coarsest_within(0.2) == 48  # e(48) = 18.4%, e(36) = 24.5%
+    assert g.coarsest_within(0.01) is None
+    d = g.as_dict()
+    assert d["cells_for_2pct"] == pytest.approx(0.3 / 0.034 / 0.02, rel=1e-9)
+
+
+def test_oscillatory_series_has_no_order():
+    g = grid_convergence([16, 32, 64], [1.0, 1.02, 0.99])
+    assert g.kind == "oscillatory"
+    assert g.order is None and g.extrapolated is None
+    assert g.gci == pytest.approx(0.015 / 0.99)
+    assert g.cells_for(0.01) is None
+
+
+def test_converged_series():
+    g = grid_convergence([16, 32, 64], [1.1, 1.0, 1.0])
+    assert g.kind == "converged" and g.gci == 0.0 and g.extrapolated == 1.0
+
+
+@pytest.mark.parametrize(
+    ("cells", "values", "match"),
+    [
+        ([16, 32], [1.0, 1.1], "three or more"),
+        ([32, 16, 64], [1.0, 1.1, 1.2], "must increase"),
+        ([16, 32, 64], [1.0, float("nan"), 1.2], r"\[32\]"),
+    ],
+)
+def test_bad_series_refused(cells, values, match):
+    with pytest.raises(FoamsiloError, match=match):
+        grid_convergence(cells, values)
