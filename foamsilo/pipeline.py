@@ -318,9 +318,13 @@ def run(
         wall0, cpu0 = time.perf_counter(), _children_cpu()
         while True:
             try:
+                # the wall-time limit is the whole run's, recoveries included
+                left = None
+                if max_wall_seconds is not None:
+                    left = max(max_wall_seconds - (time.perf_counter() - wall0), 1.0)
                 result = run_solver(
                     case_dir, of, solver, progress=progress, n_procs=ranks, hostfile=hostfile,
-                    max_wall_seconds=max_wall_seconds, append_log=bool(recoveries),
+                    max_wall_seconds=left, append_log=bool(recoveries),
                 )  # fmt: skip
                 break
             except DivergenceError as exc:
@@ -335,6 +339,12 @@ def run(
                         recoveries=recoveries)  # fmt: skip
                 raise
             except RunTimeLimitError as exc:
+                if max_wall_seconds is not None:
+                    # said as the whole run's limit, not as what the last attempt had left
+                    whole = RunTimeLimitError(max_wall_seconds, exc.time, exc.end_time, case_dir)
+                    exc.limit = max_wall_seconds
+                    after = f" (after {len(recoveries)} recoveries)" if recoveries else ""
+                    exc.args = (f"{whole}{after}",)
                 _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(exc),
                         recoveries=recoveries)  # fmt: skip
                 raise

@@ -266,3 +266,19 @@ def test_a_diverged_run_recovers_with_a_smaller_step(tmp_path, solver):
     # the cost of every attempt, not of the last one only
     assert s["run"]["cpu_seconds_all_attempts"] > s["run"]["cpu_seconds"]
     assert s["run"]["wall_seconds_all_attempts"] > s["run"]["wall_seconds"]
+
+
+def test_a_run_is_stopped_at_its_wall_time_limit(tmp_path, solver):
+    from foamsilo.errors import RunTimeLimitError
+    from foamsilo.pipeline import CaseSpec, run_case
+
+    case = tmp_path / "limit"
+    spec = CaseSpec(case, "zhou-planar", ("mesh.cells_across=32", "run.end_time=5.0"),
+                    max_wall_seconds=4.0)  # fmt: skip
+    with pytest.raises(RunTimeLimitError) as info:
+        run_case(spec)
+    assert info.value.limit == 4.0
+    assert 0.0 < (info.value.time or 0.0) < 5.0
+    record = json.loads((case / "run.json").read_text())
+    assert record["status"] == "time-limit"
+    assert (case / "constant" / "polyMesh").is_dir() and (case / "log.siloFoam").exists()

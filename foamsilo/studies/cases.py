@@ -109,6 +109,7 @@ def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
         "wall_s": o.wall_s,
     }
     row.update(summary_fields(o.summary or {}))
+    row.update(record_fields(o.spec.case_dir, row))
     row.update(step_history(o.spec.case_dir))
     scene = load_preset(case.preset, case.sets)
     row["end_time"] = scene.run.end_time
@@ -134,6 +135,16 @@ def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
         recoveries=len(run.get("recoveries") or []),
         Q_time_error=s.get("Q_time_error"),
     )
+
+
+def record_fields(case_dir: Path, row: dict[str, Any]) -> dict[str, Any]:
+    """Return what a run without a summary (it stopped) left in ``run.json``: its recoveries."""
+    from foamsilo.case import read_run_record
+
+    if row.get("Q") is not None:
+        return {}
+    record = read_run_record(Path(case_dir)) or {}
+    return {"recoveries": len(record.get("recoveries") or [])}
 
 
 def run_rows(

@@ -51,6 +51,7 @@ from foamsilo.studies.cases import (
     machine_info,
     overrides,
     pick,
+    record_fields,
     run_rows,
     study_table,
     summary_fields,
@@ -440,13 +441,27 @@ def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
     if not path.is_file():
         raise FoamsiloError(f"{path}: no suite results to write a report from; run the suite first")
     result = json.loads(path.read_text())
+    for row in _case_rows(result):
+        case_dir = Path(row["case_dir"])
+        summary = case_dir / "summary.json"
+        if "Q_time_error" not in row and summary.is_file():
+            row.update(summary_fields(json.loads(summary.read_text())))
+        if case_dir.is_dir():
+            row.update(record_fields(case_dir, row))
     for data in (result.get("work-precision") or {}).values():
-        for row in data["rows"]:
-            summary = Path(row.get("case_dir", "")) / "summary.json"
-            if "Q_time_error" not in row and summary.is_file():
-                row.update(summary_fields(json.loads(summary.read_text())))
         derive_work_precision(data)
     return write_report(result, out_dir, stem)
+
+
+def _case_rows(node: Any) -> list[Row]:
+    """Every row of a case in the suite's results (a dict with ``case_dir``), at any depth."""
+    if isinstance(node, dict):
+        if "case_dir" in node and "outcome" in node:
+            return [node]
+        return [r for v in node.values() for r in _case_rows(v)]
+    if isinstance(node, list):
+        return [r for v in node for r in _case_rows(v)]
+    return []
 
 
 def write_report(result: dict[str, Any], out_dir: Path, stem: str) -> dict[str, Any]:
@@ -579,8 +594,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         for preset, data in wp.items():
             lines += [
                 f"**{preset}** (law: {data['law']}, Q = {data['Q_law']:.5g}); resolution "
-                f"for 5%: {data['recommend_5pct']} across, for 2%: "
-                f"{data['recommend_2pct']} across (against the finest).",
+                f"for 5%: {data['recommend_5pct'] or 'none'} across, for 2%: "
+                f"{data['recommend_2pct'] or 'none'} across (against the finest run).",
                 "",
                 "| cells across | cells | Q | Q* | vs finest | vs extrapolated | vs law "
                 "| time error | wall [s] | CPU [s] | steps | recoveries |",
