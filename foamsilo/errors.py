@@ -173,16 +173,26 @@ class RunTimeLimitError(FoamsiloError):
         The limit [s].
     time, end_time
         Simulated time reached and the end time aimed at [s].
+    recoveries
+        Recoveries of the run before it reached the limit.
     """
 
-    def __init__(self, limit: float, time: float | None, end_time: float, case_dir: Path) -> None:
+    def __init__(
+        self,
+        limit: float,
+        time: float | None,
+        end_time: float,
+        case_dir: Path,
+        recoveries: int = 0,
+    ) -> None:
         self.limit = limit
         self.time = time
         self.end_time = end_time
         self.case_dir = case_dir
         reached = f"{time:.6g}" if time is not None else "0"
+        after = f" (after {recoveries} recoveries)" if recoveries else ""
         super().__init__(
-            f"stopped at the wall-time limit of {limit:g} s: reached t = {reached} s of "
+            f"stopped at the wall-time limit of {limit:g} s{after}: reached t = {reached} s of "
             f"{end_time:g} s; case kept in {case_dir}"
         )
 

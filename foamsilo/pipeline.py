@@ -339,15 +339,12 @@ def run(
                         recoveries=recoveries)  # fmt: skip
                 raise
             except RunTimeLimitError as exc:
-                if max_wall_seconds is not None:
-                    # said as the whole run's limit, not as what the last attempt had left
-                    whole = RunTimeLimitError(max_wall_seconds, exc.time, exc.end_time, case_dir)
-                    exc.limit = max_wall_seconds
-                    after = f" (after {len(recoveries)} recoveries)" if recoveries else ""
-                    exc.args = (f"{whole}{after}",)
-                _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(exc),
+                # said as the whole run's limit, not as what the last attempt had left
+                whole = RunTimeLimitError(max_wall_seconds or exc.limit, exc.time, exc.end_time,
+                                          case_dir, len(recoveries))  # fmt: skip
+                _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(whole),
                         recoveries=recoveries)  # fmt: skip
-                raise
+                raise whole from None
             except (FoamError, FoamsiloError) as exc:
                 _record(case_dir, "failed", n_procs=ranks, error=_error_record(exc),
                         recoveries=recoveries)  # fmt: skip

@@ -84,12 +84,7 @@ class GridConvergence:
     def coarsest_within(self, level: float) -> int | None:
         """Coarsest measured grid from which this and every finer one are within ``level``."""
         err = self.error_vs_extrapolated
-        if err is None:
-            return None
-        for i, n in enumerate(self.cells):
-            if all(abs(e) <= level for e in err[i:]):
-                return n
-        return None
+        return None if err is None else coarsest_within(self.cells, err, level)
 
     def as_dict(self) -> dict[str, Any]:
         """Plain data, with the 1% and 2% resolutions."""
@@ -99,6 +94,14 @@ class GridConvergence:
             out[f"cells_for_{key}"] = self.cells_for(level)
             out[f"coarsest_within_{key}"] = self.coarsest_within(level)
         return out
+
+
+def coarsest_within(cells: list[int], errors: list[float], level: float) -> int | None:
+    """Return the coarsest grid from which it and every finer one have |error| <= ``level``."""
+    for i, n in enumerate(cells):
+        if all(abs(e) <= level for e in errors[i:]):
+            return n
+    return None
 
 
 def _order(r21: float, r32: float, e21: float, e32: float) -> float | None:

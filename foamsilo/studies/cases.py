@@ -109,7 +109,7 @@ def outcome_row(case: StudyCase, o: Outcome) -> dict[str, Any]:
         "wall_s": o.wall_s,
     }
     row.update(summary_fields(o.summary or {}))
-    row.update(record_fields(o.spec.case_dir, row))
+    row.update(record_fields(o.spec.case_dir))
     row.update(step_history(o.spec.case_dir))
     scene = load_preset(case.preset, case.sets)
     row["end_time"] = scene.run.end_time
@@ -132,19 +132,16 @@ def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
         lost_through_top=s.get("lost_through_top_rel"),
         fill_height_end_m=s.get("fill_height_end_m"),
         simulated_time_s=s.get("simulated_time_s"),
-        recoveries=len(run.get("recoveries") or []),
         Q_time_error=s.get("Q_time_error"),
     )
 
 
-def record_fields(case_dir: Path, row: dict[str, Any]) -> dict[str, Any]:
-    """Return what a run without a summary (it stopped) left in ``run.json``: its recoveries."""
+def record_fields(case_dir: Path) -> dict[str, Any]:
+    """Return what a row takes from ``run.json`` (also a stopped run's): its recoveries."""
     from foamsilo.case import read_run_record
 
-    if row.get("Q") is not None:
-        return {}
-    record = read_run_record(Path(case_dir)) or {}
-    return {"recoveries": len(record.get("recoveries") or [])}
+    record = read_run_record(Path(case_dir))
+    return {"recoveries": len(record.get("recoveries") or [])} if record else {}
 
 
 def run_rows(

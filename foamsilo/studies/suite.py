@@ -99,10 +99,9 @@ def _series(entry: dict[str, Any], quick: bool) -> tuple[list[Any], list[StudyCa
 # ----------------------------------------------------------- work precision
 def _recommend(cells: list[int], err: list[float], level: float) -> int | None:
     """Coarsest resolution from which every finer one is within ``level`` of the finest."""
-    for i, _ in enumerate(cells[:-1]):
-        if all(e <= level for e in err[i:-1]):
-            return cells[i]
-    return None
+    from foamsilo.post.convergence import coarsest_within
+
+    return coarsest_within(cells[:-1], err[:-1], level)
 
 
 def work_precision(
@@ -447,7 +446,7 @@ def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
         if "Q_time_error" not in row and summary.is_file():
             row.update(summary_fields(json.loads(summary.read_text())))
         if case_dir.is_dir():
-            row.update(record_fields(case_dir, row))
+            row.update(record_fields(case_dir))
     for data in (result.get("work-precision") or {}).values():
         derive_work_precision(data)
     return write_report(result, out_dir, stem)
