@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from foamsilo.errors import FoamsiloError
 from foamsilo.studies.suite import _recommend, beverloo_fit, checks, derive_work_precision
 
 
@@ -72,3 +73,36 @@ def test_checks_flag_a_figure_outside_its_tolerance():
     rows[-1]["Q"] = None  # a run that stopped has no rate: the check fails, not crashes
     by_name = {c.name: c for c in checks(result)}
     assert not by_name["lab silo: Q rises with resolution"].passed
+
+
+def test_report_rewritten_from_the_json_alone(tmp_path):
+    import json
+
+    from foamsilo.studies.suite import rewrite_report
+
+    def rows(cells, q_inf, c):
+        return [{"cells_across": n, "Q": q_inf - c / n, "Q_dimensionless": 0.16, "outcome":
+                 "steady", "case_dir": str(tmp_path / "gone"), "flux_vs_volume_rel_diff": 0.001,
+                 "wall_s": float(n)}
+                for n in cells]  # fmt: skip
+
+    result = {
+        "quick": False, "jobs": 2, "commit": "abc", "wall_s": {"work-precision": 60.0},
+        "machine": {"cpu": "test", "cores": 2, "date": "2026-12-01"},
+        "work-precision": {
+            "zhou-planar": {"law": "beverloo-2d", "Q_law": 40.0,
+                            "rows": rows([16, 32, 64], 41.0, 80.0)},
+            "zhou-cyl-bottom": {"law": "zhou-eq1", "Q_law": 0.0208,
+                                "rows": rows([36, 48, 72], 0.034, 0.3)},
+        },
+    }  # fmt: skip
+    (tmp_path / "suite.json").write_text(json.dumps(result))
+    out = rewrite_report(False, tmp_path)
+    # the grid study is derived again from the rows: Q = Q_inf - C / N is first order
+    conv = out["work-precision"]["zhou-cyl-bottom"]["convergence"]
+    assert conv["order"] == pytest.approx(1.0, rel=1e-9)
+    assert conv["extrapolated"] == pytest.approx(0.034, rel=1e-9)
+    md = (tmp_path / "suite.md").read_text()
+    assert "extrapolated Q = 0.034" in md and "observed order p = 1.00" in md
+    with pytest.raises(FoamsiloError, match="no suite results"):
+        rewrite_report(True, tmp_path)
