@@ -61,7 +61,7 @@ from foamsilo.jsonio import dumps, jsonable
 from foamsilo.post import reduce_case
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
-from foamsilo.run import ProgressCallback, RunResult, run_solver
+from foamsilo.run import ProgressCallback, RunResult, StepRelease, run_solver
 from foamsilo.scene import Scene, is_scene_file, load_scene, load_scene_file, scene_digest
 from foamsilo.solver import ensure_solver
 from foamsilo.summary import RunSummary, write_summary
@@ -210,6 +210,11 @@ def _record(case_dir: Path, status: str, **data: Any) -> None:
 
 #: A recovery caps the step at this fraction of the step the run diverged with
 RECOVERY_STEP_FACTOR = 0.5
+#: The scene's own step cap is put back once the run is this many discharge
+#: times sqrt(D/g) past the time it diverged at: the trouble met so far is a
+#: start-up transient (docs/solver.md), over once the flow through the orifice
+#: is established; kept to the end it made a recovered run several times dearer
+RELEASE_AFTER = 1.0
 
 
 def _recover(
@@ -219,8 +224,10 @@ def _recover(
 
     The time directory of the step that blew up (if it was a write time) is
     removed; ``maxDeltaT`` in ``controlDict`` becomes ``RECOVERY_STEP_FACTOR``
-    times the step the run was taking. The recovery is said, appended to the
-    solver's log, and returned for ``run.json``.
+    times the step the run was taking, and ``controlDict`` is made modifiable
+    at run time (with no modification skew) so that the cap can be put back
+    while the solver runs. The recovery is said, appended to the solver's
+    log, and returned for ``run.json``.
     """
     from foamsilo.case.times import remove_times_from
     from foamsilo.foam import dict_value, edit_dict
@@ -235,6 +242,10 @@ def _recover(
     with edit_dict(control) as cd:
         cd["maxDeltaT"] = new_cap
         cd["deltaT"] = min(float(cd["deltaT"]), new_cap)
+        cd["runTimeModifiable"] = True
+        # OpenFOAM ignores a change made within this many seconds of the last
+        # (10 s by default, for clocks skewed across NFS); the runner is local
+        cd["OptimisationSwitches"] = {"fileModificationSkew": 0}
     restart = inspect(case_dir).latest_time or "0"
     line = (
         f"foamsilo: recovery {k} of {scene.run.max_recoveries}: {exc.quantity} diverged at "
@@ -252,6 +263,33 @@ def _recover(
         "restart_time": float(restart),
         "max_delta_t": new_cap,
     }
+
+
+def _plan_release(
+    record: dict[str, Any], scene: Scene, released_before: bool, case_dir: Path, say: Say
+) -> StepRelease | None:
+    """Plan to put the scene's step cap back after this recovery (None: kept to the end).
+
+    A run that diverged again after a cap was put back keeps its smaller cap.
+    """
+    from foamsilo.run import LOG_NAME
+
+    if released_before:
+        line = "foamsilo: it diverged after its step cap was put back: the cap is kept to the end"
+        say(line.removeprefix("foamsilo: "))
+        with open(case_dir / LOG_NAME, "a") as log:
+            log.write(line + "\n")
+        record["release_time"] = None
+        return None
+    diverged_at = record["time"] if record["time"] is not None else record["restart_time"]
+    at = diverged_at + RELEASE_AFTER * scene.discharge_time_scale
+    record["release_time"] = at
+    return StepRelease(at, scene.delta_t_max)
+
+
+def _note_release(recoveries: list[dict[str, Any]], release: StepRelease | None) -> None:
+    if recoveries and release is not None:
+        recoveries[-1]["released_at"] = release.released_at
 
 
 def _error_record(exc: BaseException) -> dict[str, Any]:
@@ -314,6 +352,8 @@ def run(
             say(f"resuming from t = {status.latest_time} s")
         _record(case_dir, "running", n_procs=ranks, pid=os.getpid())
         recoveries: list[dict[str, Any]] = []
+        release: StepRelease | None = None
+        released_before = False
         # what every attempt cost: a recovered run's figures cover its last attempt only
         wall0, cpu0 = time.perf_counter(), _children_cpu()
         while True:
@@ -324,16 +364,22 @@ def run(
                     left = max(max_wall_seconds - (time.perf_counter() - wall0), 1.0)
                 result = run_solver(
                     case_dir, of, solver, progress=progress, n_procs=ranks, hostfile=hostfile,
-                    max_wall_seconds=left, append_log=bool(recoveries),
+                    max_wall_seconds=left, append_log=bool(recoveries), step_release=release,
                 )  # fmt: skip
+                _note_release(recoveries, release)
                 break
             except DivergenceError as exc:
+                _note_release(recoveries, release)
+                released_before = released_before or bool(
+                    release and release.released_at is not None
+                )
                 if len(recoveries) >= scene.run.max_recoveries:
                     exc.recoveries = recoveries
                     _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc),
                             recoveries=recoveries)  # fmt: skip
                     raise
                 recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say))
+                release = _plan_release(recoveries[-1], scene, released_before, case_dir, say)
             except RunInterruptedError as exc:
                 _record(case_dir, "interrupted", n_procs=ranks, error=_error_record(exc),
                         recoveries=recoveries)  # fmt: skip

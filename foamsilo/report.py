@@ -181,7 +181,7 @@ def case_report(summary: RunSummary) -> Path:
                 f"* recovery {k}: {r['quantity']} diverged at t = {_fmt(r['time'], '.6g')} s "
                 f"(steps of {_fmt(r['delta_t'], '.3g')} s); restarted from t = "
                 f"{_fmt(r['restart_time'], '.6g')} s with the step capped at "
-                f"{_fmt(r['max_delta_t'], '.3g')} s"
+                f"{_fmt(r['max_delta_t'], '.3g')} s{_release_said(r)}"
             )
         if run.get("recoveries"):
             out += [
@@ -224,3 +224,12 @@ def sweep_report(output: Path) -> Path:
     path = output / REPORT_MD
     write_whole(path, "\n".join(out))
     return path
+
+
+def _release_said(recovery: dict[str, Any]) -> str:
+    """How a recovery's step cap ended: put back at a time, or kept to the end."""
+    if recovery.get("released_at") is not None:
+        return f", put back to the scene's cap at t = {_fmt(recovery['released_at'], '.6g')} s"
+    if "release_time" in recovery and recovery["release_time"] is None:
+        return ", kept to the end (it diverged again after a cap was put back)"
+    return ""

@@ -14,6 +14,7 @@ a standard error of ~0.7%; measured differences are 0.03-0.4%.
 from __future__ import annotations
 
 import contextlib
+import csv
 import io
 import json
 import os
@@ -27,6 +28,8 @@ from pathlib import Path
 import pytest
 
 from foamsilo.cli import main
+from foamsilo.foam import dict_value
+from foamsilo.scene import load_scene_file
 
 pytestmark = pytest.mark.openfoam
 
@@ -266,6 +269,19 @@ def test_a_diverged_run_recovers_with_a_smaller_step(tmp_path, solver):
     # the cost of every attempt, not of the last one only
     assert s["run"]["cpu_seconds_all_attempts"] > s["run"]["cpu_seconds"]
     assert s["run"]["wall_seconds_all_attempts"] > s["run"]["wall_seconds"]
+    # past the trouble, the scene's own cap is back: the solver read it while
+    # running and took steps larger than the recovery's cap again
+    last = recoveries[-1]
+    assert last.get("released_at") is not None and last["released_at"] >= last["release_time"]
+    assert float(dict_value(case / "system" / "controlDict", "maxDeltaT")) == pytest.approx(
+        load_scene_file(case / "scene.toml").delta_t_max, rel=1e-6
+    )
+    with open(case / "steps.csv") as f:
+        steps = [(float(r["time"]), float(r["delta_t"])) for r in csv.DictReader(f)]
+    after = [dt for t, dt in steps if t > last["released_at"]]
+    assert after and max(after) > 1.5 * last["max_delta_t"]
+    assert "step cap put back" in (case / "log.siloFoam").read_text()
+    assert "put back to the scene's cap" in (case / "report.md").read_text()
 
 
 def test_a_run_is_stopped_at_its_wall_time_limit(tmp_path, solver):

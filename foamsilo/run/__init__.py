@@ -4,6 +4,7 @@ from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor, Step
 from foamsilo.run.runner import (
     ProgressCallback,
     RunResult,
+    StepRelease,
     mpi_environment,
     prepare_decomposition,
     run_solver,
@@ -16,6 +17,7 @@ __all__ = [
     "LogMonitor",
     "ProgressCallback",
     "RunResult",
+    "StepRelease",
     "Step",
     "mpi_environment",
     "prepare_decomposition",

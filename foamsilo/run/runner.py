@@ -22,7 +22,6 @@ import resource
 import shutil
 import signal
 import socket
-import sys
 import threading
 import time
 from collections.abc import Callable
@@ -52,6 +51,21 @@ from foamsilo.solver import SolverBuild
 from foamsilo.toolchain import OpenFOAM
 
 ProgressCallback = Callable[[LogMonitor, float], None]
+
+
+@dataclass
+class StepRelease:
+    """A step cap to put back in ``controlDict`` once the run is past ``time``.
+
+    A recovered run needs its smaller step through the trouble it met, not to
+    its end: the cap is written back while the solver runs (the recovery made
+    ``controlDict`` modifiable at run time), and the solver reads it at its
+    next step. ``released_at`` is the simulated time it was put back.
+    """
+
+    time: float
+    max_delta_t: float
+    released_at: float | None = None
 
 
 @dataclass
@@ -91,6 +105,18 @@ class RunResult:
         d = asdict(self)
         d["case"] = str(self.case)
         return d
+
+
+def _release_step_cap(control: Path, release: StepRelease, now: float, log: Any) -> None:
+    from foamsilo.foam import edit_dict
+
+    with edit_dict(control) as cd:
+        cd["maxDeltaT"] = release.max_delta_t
+    release.released_at = now
+    log.write(
+        f"foamsilo: past t = {release.time:.6g} s: step cap put back to "
+        f"{release.max_delta_t:.3g} s at t = {now:.6g} s\n"
+    )
 
 
 def _all_local(hostfile: Path | None) -> bool:
@@ -165,6 +191,7 @@ def run_solver(
     n_procs: int = 1,
     hostfile: Path | None = None,
     append_log: bool = False,
+    step_release: StepRelease | None = None,
 ) -> RunResult:
     """Run siloFoam in ``case`` through PyFoam, serially or with MPI.
 
@@ -196,6 +223,9 @@ def run_solver(
     append_log
         Append to the solver's log even when the run starts at t = 0 (a
         retry: the log keeps what went before).
+    step_release
+        A step cap to write back into ``controlDict`` once the simulated time
+        reaches ``step_release.time`` (its ``released_at`` is set when done).
 
     Raises
     ------
@@ -255,6 +285,10 @@ def run_solver(
                 # on to the ranks (a killed mpirun leaves them running)
                 self.run.interrupt(pass_int=parallel)
                 return
+            now = monitor.current_time
+            if step_release and step_release.released_at is None and now is not None \
+                    and now >= step_release.time:  # fmt: skip
+                _release_step_cap(control, step_release, now, log)
             if max_wall_seconds and time.perf_counter() - started > max_wall_seconds:
                 if not timed_out:
                     timed_out.append(monitor.current_time)
@@ -286,8 +320,10 @@ def run_solver(
 
         if threading.current_thread() is threading.main_thread():
             old_handler = signal.signal(signal.SIGINT, _on_sigint)
-        # PyFoam's own messages go to stderr so that --json stdout stays clean
-        with contextlib.redirect_stdout(sys.stderr):
+        # PyFoam's own messages (the solver lines it read after a stop, "Killing
+        # PID") go to the solver's log: not onto the user's terminal, and
+        # --json stdout stays clean
+        with contextlib.redirect_stdout(log):
             data = runner.start()
             runner.run.join()  # the solver process is reaped: its rusage is final
     finally:
