@@ -314,6 +314,7 @@ def _print_summary(s: dict[str, Any]) -> None:
     con = _console()
     t = Table(
         title=f"{s['scene']} ({s['representation']}, {s['cells_across']} cells across L, "
+        f"{s.get('cells_across_orifice')} across D{', graded' if s.get('graded') else ''}, "
         f"{s['cells']} cells)"
     )
     t.add_column("quantity")

@@ -286,7 +286,7 @@ def _geometry_key(scene: Scene) -> tuple[Any, ...]:
         s.shape,
         s.width,
         s.orifice_width,
-        scene.mesh.cells_across,
+        scene.cells_across,
         scene.material.grain_diameter,
     )
 
@@ -378,7 +378,7 @@ def compare_runs(
             case=str(r.case),
             scene=sc.name,
             representation=sc.representation,
-            cells_across=sc.mesh.cells_across,
+            cells_across=sc.cells_across,
             orifice_width=sc.silo.orifice_width,
             q_air=q_air,
             q=r.q,

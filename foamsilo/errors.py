@@ -189,6 +189,7 @@ class RunTimeLimitError(FoamsiloError):
         self.time = time
         self.end_time = end_time
         self.case_dir = case_dir
+        self.recoveries = recoveries
         reached = f"{time:.6g}" if time is not None else "0"
         after = f" (after {recoveries} recoveries)" if recoveries else ""
         super().__init__(

@@ -210,6 +210,11 @@ def _record(case_dir: Path, status: str, **data: Any) -> None:
 
 #: A recovery caps the step at this fraction of the step the run diverged with
 RECOVERY_STEP_FACTOR = 0.5
+#: The first recovery iterates each step this many times (PIMPLE outer
+#: correctors) instead: the start-up blow-up of the wedges is the mu(I)
+#: viscosity's Picard iteration not converging, not too long a step
+#: (docs/solver.md)
+RECOVERY_OUTER_CORRECTORS = 8
 #: The scene's own step cap is put back once the run is this many discharge
 #: times sqrt(D/g) past the time it diverged at: the trouble met so far is a
 #: start-up transient (docs/solver.md), over once the flow through the orifice
@@ -220,37 +225,46 @@ RELEASE_AFTER = 1.0
 def _recover(
     case_dir: Path, exc: DivergenceError, k: int, scene: Scene, say: Say
 ) -> dict[str, Any]:
-    """Set a diverged case back to its latest complete time with a smaller step cap.
+    """Set a diverged case back to its latest complete time with more care per step.
 
     The time directory of the step that blew up (if it was a write time) is
-    removed; ``maxDeltaT`` in ``controlDict`` becomes ``RECOVERY_STEP_FACTOR``
-    times the step the run was taking, and ``controlDict`` is made modifiable
-    at run time (with no modification skew) so that the cap can be put back
-    while the solver runs. The recovery is said, appended to the solver's
-    log, and returned for ``run.json``.
+    removed. A run iterating each step fewer than
+    ``RECOVERY_OUTER_CORRECTORS`` times goes on with that many (``fvSolution``
+    PIMPLE ``nOuterCorrectors``); one that already does has its step capped
+    at ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``).
+    ``controlDict`` is made modifiable at run time (with no modification
+    skew) so that both can be put back while the solver runs. The recovery is
+    said, appended to the solver's log, and returned for ``run.json``.
     """
     from foamsilo.case.times import remove_times_from
     from foamsilo.foam import dict_value, edit_dict
-    from foamsilo.run import LOG_NAME
+    from foamsilo.run import LOG_NAME, modifiable_while_running
 
     control = case_dir / "system" / "controlDict"
+    solution = case_dir / "system" / "fvSolution"
     cap = float(dict_value(control, "maxDeltaT"))
+    outer = int(dict_value(solution, "PIMPLE")["nOuterCorrectors"])
     step = exc.delta_t if exc.delta_t else cap
-    new_cap = RECOVERY_STEP_FACTOR * min(step, cap)
+    if outer < RECOVERY_OUTER_CORRECTORS:
+        new_cap, new_outer = cap, RECOVERY_OUTER_CORRECTORS
+        how = f"{new_outer} outer iterations per step (was {outer})"
+    else:
+        new_cap, new_outer = RECOVERY_STEP_FACTOR * min(step, cap), outer
+        how = f"the step capped at {new_cap:.3g} s"
     if exc.time is not None:
         remove_times_from(case_dir, exc.time)
     with edit_dict(control) as cd:
         cd["maxDeltaT"] = new_cap
         cd["deltaT"] = min(float(cd["deltaT"]), new_cap)
-        cd["runTimeModifiable"] = True
-        # OpenFOAM ignores a change made within this many seconds of the last
-        # (10 s by default, for clocks skewed across NFS); the runner is local
-        cd["OptimisationSwitches"] = {"fileModificationSkew": 0}
+    modifiable_while_running(case_dir)
+    if new_outer != outer:
+        with edit_dict(solution) as sd:
+            sd["PIMPLE"]["nOuterCorrectors"] = new_outer
     restart = inspect(case_dir).latest_time or "0"
     line = (
         f"foamsilo: recovery {k} of {scene.run.max_recoveries}: {exc.quantity} diverged at "
         f"t = {exc.time} s with steps of {step:.3g} s; restarting from t = {restart} s with "
-        f"the step capped at {new_cap:.3g} s"
+        f"{how}"
     )
     say(line.removeprefix("foamsilo: "))
     with open(case_dir / LOG_NAME, "a") as log:
@@ -262,20 +276,25 @@ def _recover(
         "delta_t": step,
         "restart_time": float(restart),
         "max_delta_t": new_cap,
+        "outer_correctors": new_outer,
     }
 
 
 def _plan_release(
     record: dict[str, Any], scene: Scene, released_before: bool, case_dir: Path, say: Say
 ) -> StepRelease | None:
-    """Plan to put the scene's step cap back after this recovery (None: kept to the end).
+    """Plan to put the scene's step cap and iterations back (None: kept to the end).
 
-    A run that diverged again after a cap was put back keeps its smaller cap.
+    A run that diverged again after they were put back keeps its recovery's
+    settings to the end.
     """
     from foamsilo.run import LOG_NAME
 
     if released_before:
-        line = "foamsilo: it diverged after its step cap was put back: the cap is kept to the end"
+        line = (
+            "foamsilo: it diverged after its step settings were put back: the recovery's "
+            "are kept to the end"
+        )
         say(line.removeprefix("foamsilo: "))
         with open(case_dir / LOG_NAME, "a") as log:
             log.write(line + "\n")
@@ -284,7 +303,7 @@ def _plan_release(
     diverged_at = record["time"] if record["time"] is not None else record["restart_time"]
     at = diverged_at + RELEASE_AFTER * scene.discharge_time_scale
     record["release_time"] = at
-    return StepRelease(at, scene.delta_t_max)
+    return StepRelease(at, scene.delta_t_max, scene.outer_correctors)
 
 
 def _note_release(recoveries: list[dict[str, Any]], release: StepRelease | None) -> None:
@@ -356,6 +375,13 @@ def run(
         released_before = False
         # what every attempt cost: a recovered run's figures cover its last attempt only
         wall0, cpu0 = time.perf_counter(), _children_cpu()
+
+        def spent() -> dict[str, float]:
+            return {
+                "wall_seconds_all_attempts": time.perf_counter() - wall0,
+                "cpu_seconds_all_attempts": _children_cpu() - cpu0,
+            }
+
         while True:
             try:
                 # the wall-time limit is the whole run's, recoveries included
@@ -376,36 +402,35 @@ def run(
                 if len(recoveries) >= scene.run.max_recoveries:
                     exc.recoveries = recoveries
                     _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc),
-                            recoveries=recoveries)  # fmt: skip
+                            recoveries=recoveries, **spent())  # fmt: skip
                     raise
                 recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say))
+                recoveries[-1]["after_wall_seconds"] = time.perf_counter() - wall0
                 release = _plan_release(recoveries[-1], scene, released_before, case_dir, say)
             except RunInterruptedError as exc:
                 _record(case_dir, "interrupted", n_procs=ranks, error=_error_record(exc),
-                        recoveries=recoveries)  # fmt: skip
+                        recoveries=recoveries, **spent())  # fmt: skip
                 raise
             except RunTimeLimitError as exc:
                 # said as the whole run's limit, not as what the last attempt had left
                 whole = RunTimeLimitError(max_wall_seconds or exc.limit, exc.time, exc.end_time,
                                           case_dir, len(recoveries))  # fmt: skip
                 _record(case_dir, "time-limit", n_procs=ranks, error=_error_record(whole),
-                        recoveries=recoveries)  # fmt: skip
+                        recoveries=recoveries, **spent())  # fmt: skip
                 raise whole from None
             except (FoamError, FoamsiloError) as exc:
                 _record(case_dir, "failed", n_procs=ranks, error=_error_record(exc),
-                        recoveries=recoveries)  # fmt: skip
+                        recoveries=recoveries, **spent())  # fmt: skip
                 raise
             except KeyboardInterrupt:
-                _record(case_dir, "interrupted", n_procs=ranks, recoveries=recoveries)
+                _record(case_dir, "interrupted", n_procs=ranks, recoveries=recoveries, **spent())
                 raise
         if reconstruct and ranks > 1:
             say("reconstructing the processor directories")
             reconstruct_par(of, case_dir)
-        spent: dict[str, float] = {}
-        if recoveries:
-            spent["wall_seconds_all_attempts"] = time.perf_counter() - wall0
-            spent["cpu_seconds_all_attempts"] = _children_cpu() - cpu0
-        _record(case_dir, "finished", **result.as_dict(), recoveries=recoveries, **spent)
+        # a run with no recovery: its one attempt's figures are the run's
+        _record(case_dir, "finished", **result.as_dict(), recoveries=recoveries,
+                **(spent() if recoveries else {}))  # fmt: skip
     return result
 
 

@@ -67,7 +67,7 @@ def plot_discharge(summary: RunSummary, path: Path) -> Path:
             ax.axhline(ref.q / scale, color=colour, ls=":", lw=1.5, label=ref.label)
     ax.set_xlabel(r"$t/\sqrt{L/g}$")
     ax.set_ylabel(r"$Q/(\rho\sqrt{gL^3})$" if planar else r"$Q/(\rho\sqrt{g}D^{5/2})$")
-    ax.set_title(f"{scene.name}: {scene.mesh.cells_across} cells across L", fontsize=10)
+    ax.set_title(f"{scene.name}: {scene.cells_across} cells across L", fontsize=10)
     top = max([float(np.max(d.mass_flow / scale))] + [r.q / scale for r in summary.references])
     ax.set_ylim(0, 1.2 * top)
     return finish(fig, ax, path)
@@ -86,7 +86,9 @@ def case_report(summary: RunSummary) -> Path:
         f"# {scene.name}: discharge report",
         "",
         f"Case `{case.name}/`, {s.get('representation')} mesh of {_fmt(s.get('cells'))} cells "
-        f"({s.get('cells_across')} across L), {s['simulated_time_s']:.4g} s simulated.",
+        f"({s.get('cells_across')} across L, {s.get('cells_across_orifice')} across D"
+        f"{', graded away from the orifice' if s.get('graded') else ''}), "
+        f"{s['simulated_time_s']:.4g} s simulated.",
         "",
         "## Scene",
         "",
@@ -181,7 +183,13 @@ def case_report(summary: RunSummary) -> Path:
                 f"* recovery {k}: {r['quantity']} diverged at t = {_fmt(r['time'], '.6g')} s "
                 f"(steps of {_fmt(r['delta_t'], '.3g')} s); restarted from t = "
                 f"{_fmt(r['restart_time'], '.6g')} s with the step capped at "
-                f"{_fmt(r['max_delta_t'], '.3g')} s{_release_said(r)}"
+                f"{_fmt(r['max_delta_t'], '.3g')} s"
+                + (
+                    f", {r['outer_correctors']} outer iterations per step"
+                    if r.get("outer_correctors")
+                    else ""
+                )
+                + _release_said(r)
             )
         if run.get("recoveries"):
             out += [
@@ -229,7 +237,7 @@ def sweep_report(output: Path) -> Path:
 def _release_said(recovery: dict[str, Any]) -> str:
     """How a recovery's step cap ended: put back at a time, or kept to the end."""
     if recovery.get("released_at") is not None:
-        return f", put back to the scene's cap at t = {_fmt(recovery['released_at'], '.6g')} s"
+        return f", put back to the scene's settings at t = {_fmt(recovery['released_at'], '.6g')} s"
     if "release_time" in recovery and recovery["release_time"] is None:
-        return ", kept to the end (it diverged again after a cap was put back)"
+        return ", kept to the end (it diverged again after its settings were put back)"
     return ""

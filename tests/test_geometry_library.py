@@ -212,6 +212,59 @@ def test_every_preset_meshes_and_passes_checkmesh(preset, rep, tmp_path, openfoa
     assert area == pytest.approx(_orifice_area(scene), rel=tol)
 
 
+def _floor_spacing(msh, planar: bool) -> np.ndarray:
+    """Widths of the floor's cells along the radius (x of a planar mesh), from the msh nodes."""
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(msh))
+        _, xyz, _ = gmsh.model.mesh.getNodes()
+    finally:
+        gmsh.finalize()
+    p = np.asarray(xyz).reshape(-1, 3)
+    floor = p[np.abs(p[:, 1]) < 1e-12]
+    r = floor[:, 0] if planar else np.hypot(floor[:, 0], floor[:, 2])
+    edges = np.unique(np.round(r, 12))
+    return np.diff(edges)
+
+
+@pytest.mark.openfoam
+@pytest.mark.parametrize(
+    ("preset", "rep"),
+    [("zhou-planar", "auto"), ("zhou-cyl-bottom", "auto"), ("zhou-cyl-bottom", "3d")],
+)
+def test_a_graded_mesh_passes_checkmesh_and_grows_at_its_rate(preset, rep, tmp_path, openfoam):
+    from foamsilo.case import create_case
+
+    n = 24 if rep == "3d" else 48
+    scene = load_preset(
+        preset, [f"mesh.cells_across={n}", "mesh.growth_rate=1.1", f"mesh.representation='{rep}'"]
+    )
+    m = create_case(scene, tmp_path / preset, openfoam).mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.cells == cells_estimate(scene)
+    assert set(m.check.cell_types) <= {"hexahedra", "prisms"}
+    tol = 0.01 if rep == "3d" else 3e-3  # as for every preset's mesh
+    assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=tol)
+    rows = vertical_rows(scene)
+    # square cells of the orifice's size up to one D above the floor, then growth
+    assert rows[0].ratio == 1.0 and rows[0].y1 == pytest.approx(scene.silo.orifice_width)
+    assert 1.0 < rows[1].ratio <= 1.1 * (1 + 1e-9)
+    if rep == "3d":  # the O-grid's radial grading is its own (layout.ogrid_for)
+        return
+    widths = _floor_spacing(m.msh_file, scene.representation == "planar")
+    h = scene.cell_size
+    # the orifice's cells are the uniform mesh's; neighbours differ by at most
+    # the growth rate, and the cells by the wall have grown (both silos are
+    # narrow: the wall is reached within the growth, at 1.3 h and 2 h)
+    assert widths.min() == pytest.approx(h, rel=1e-6)
+    steps = widths[1:] / widths[:-1]
+    assert np.all(steps <= 1.1 * (1 + 1e-6)) and np.all(steps >= 1 / (1.1 * (1 + 1e-6)))
+    assert widths.max() > 1.25 * h
+
+
 @pytest.mark.openfoam
 def test_axisymmetric_and_3d_meshes_hold_the_same_granular_volume(tmp_path, openfoam):
     from foamsilo.case import create_case

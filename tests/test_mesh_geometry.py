@@ -76,3 +76,51 @@ def test_wedge_axis_and_lateral_orifice_sides():
     for y0, y1, side in right:
         inside = y0 >= s.orifice_height - 1e-12 and y1 <= s.orifice_height + s.orifice_width + 1e-12
         assert side == ("orifice" if inside else "walls")
+
+
+@pytest.mark.parametrize("growth", [1.05, 1.1, 1.2])
+@pytest.mark.parametrize("span", [0.3, 2.0, 40.0])
+def test_graded_bands_fill_the_span_and_grow_smoothly(growth, span):
+    from foamsilo.mesh.layout import graded_segments
+
+    h, coarse = 0.1, 6.0
+    bands = graded_segments(span, h, growth, coarse)
+    sizes = []
+    for length, n, r in bands:
+        first = length * (r - 1) / (r**n - 1) if abs(r - 1) > 1e-12 else length / n
+        cells = [first * r**k for k in range(n)]
+        assert sum(cells) == pytest.approx(length, rel=1e-9)
+        sizes += cells
+    assert sum(length for length, _, _ in bands) == pytest.approx(span, rel=1e-12)
+    # from the fine cell next to the span on, no jump above the growth rate
+    # within the growing band; the uniform rest (whole cells of about the
+    # coarse size) joins it within 1.5 x either way
+    steps = [b / a for a, b in zip([h, *sizes[:-1]], sizes, strict=True)]
+    n_grow = bands[0][1]
+    assert max(steps[:n_grow]) <= growth * (1 + 1e-9)
+    assert all(1 / 1.5 <= x <= 1.5 for x in steps[n_grow:])
+    assert max(sizes) <= coarse * h * 1.5
+
+
+def test_a_graded_profile_keeps_the_orifice_cells_and_spends_fewer_elsewhere():
+    for preset in ("zhou-planar", "zhou-cyl-bottom"):
+        uniform = profile_layout(load_preset(preset, ["mesh.cells_across=72"]))
+        graded = profile_layout(
+            load_preset(preset, ["mesh.cells_across=72", "mesh.growth_rate=1.1"])
+        )
+        orifice = [b.cells[0] for b in graded.blocks if b.sides[0] == "orifice"]
+        assert orifice == [b.cells[0] for b in uniform.blocks if b.sides[0] == "orifice"]
+        assert graded.n_cells < 0.6 * uniform.n_cells
+        # the rows near the floor are the uniform mesh's square cells
+        assert graded.rows[0].ratio == 1.0 and graded.rows[0].y1 >= 0.01 - 1e-12
+        # the widths grow away from the orifice on both sides of a slot
+        assert all(r >= 1.0 for r in graded.column_ratios[len(graded.columns) // 2 :])
+
+
+def test_graded_meshes_only_where_they_are_built():
+    from foamsilo.errors import SceneError
+
+    with pytest.raises(SceneError, match=r"mesh\.growth_rate.*allowed here: 1"):
+        load_preset("venier-test2", ["mesh.growth_rate=1.1"])  # eccentric outlet
+    with pytest.raises(SceneError, match=r"mesh\.growth_rate"):
+        load_preset("zhou-planar", ["mesh.growth_rate=2"])

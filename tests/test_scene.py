@@ -44,6 +44,22 @@ def test_overrides_are_typed_toml_literals():
     assert s.cell_size == pytest.approx(0.1 / 16)
 
 
+def test_the_resolution_can_be_given_across_the_orifice():
+    from foamsilo.mesh import profile_layout
+
+    # the lab silo, L/D = 6: 12 cells across D are the 72 across L
+    s = load_preset("zhou-cyl-bottom", ["mesh.cells_across_orifice=12"])
+    assert s.mesh.cells_across is None  # the preset's cells_across made way
+    assert s.cells_across == 72 and s.cell_size == pytest.approx(0.01 / 12)
+    same = load_preset("zhou-cyl-bottom", ["mesh.cells_across=72"])
+    assert profile_layout(s) == profile_layout(same)
+    # and back: setting cells_across removes cells_across_orifice
+    back = load_preset("zhou-cyl-bottom", ["mesh.cells_across_orifice=12", "mesh.cells_across=36"])
+    assert back.cells_across == 36 and back.mesh.cells_across_orifice is None
+    with pytest.raises(SceneError, match=r"mesh\.cells_across.*exactly one"):
+        load_preset("zhou-cyl-bottom", ["mesh.cells_across="])
+
+
 def test_pressure_floor_default_and_explicit():
     s = load_preset("zhou-planar")
     assert s.p_min == pytest.approx(1e-4 * 2500 * 9.81 * 0.1)
@@ -92,11 +108,14 @@ def test_missing_key_is_named():
 
 
 def test_exactly_one_viscosity_cap():
+    # an override of one form replaces the preset's other form ...
     data = apply_overrides(preset_data("zhou-planar"), ["material.viscosity_cap=1000"])
+    assert "viscosity_cap_scaled" not in data["material"]
+    assert scene_from_dict(data).eta_max == 1000
+    # ... a file that gives both is refused
+    data["material"]["viscosity_cap_scaled"] = 100.0
     with pytest.raises(SceneError, match="exactly one"):
         scene_from_dict(data)
-    del data["material"]["viscosity_cap_scaled"]
-    assert scene_from_dict(data).eta_max == 1000
 
 
 def test_scene_file_roundtrip(tmp_path):

@@ -91,14 +91,82 @@ def _growth(span: float, first: float, last: float) -> tuple[int, float]:
     return n, R ** (1.0 / (n - 1))
 
 
+def graded_segments(
+    span: float, h: float, growth: float, coarse: float
+) -> list[tuple[float, int, float]]:
+    """Bands of cells over ``span`` that grow away from a neighbour of size ``h``.
+
+    Each band is (length, cells, ratio), listed from the fine end; a band's
+    cells grow by ``ratio`` per cell (gmsh's ``Progression``). The first
+    band's cells grow from ``h`` by at most ``growth`` per cell up to
+    ``coarse`` x ``h``; the rest of the span, if any, is cells of that size.
+
+    Examples
+    --------
+    >>> [(round(a, 3), n, round(r, 3)) for a, n, r in graded_segments(10.0, 1.0, 1.0, 4.0)]
+    [(10.0, 10, 1.0)]
+    """
+    if growth <= 1.0 + 1e-12 or span <= 1.5 * h:
+        return [(span, max(1, round(span / h)), 1.0)]
+
+    def length(n: int, r: float) -> float:  # n cells from h r to h r^n
+        return n * h if abs(r - 1.0) < 1e-12 else h * r * (r**n - 1) / (r - 1)
+
+    n_g = max(1, math.ceil(math.log(coarse) / math.log(growth) - 1e-9)) if coarse > 1 else 0
+    r_g = coarse ** (1.0 / n_g) if n_g else 1.0
+    band = length(n_g, r_g) if n_g else 0.0
+    if n_g and band + coarse * h <= span:
+        rest = span - band
+        return [(band, n_g, r_g), (rest, max(1, round(rest / (coarse * h))), 1.0)]
+    if not n_g:
+        return [(span, max(1, round(span / h)), 1.0)]
+    # the span ends within the growth: fewest cells that reach it, ratio fitted
+    n = 1
+    while length(n, growth) < span:
+        n += 1
+    if n * h >= span:
+        return [(span, max(1, round(span / h)), 1.0)]
+    lo, hi = 1.0 + 1e-12, growth
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if length(n, mid) < span else (lo, mid)
+    return [(span, n, 0.5 * (lo + hi))]
+
+
+def coarse_ratio(scene: Scene) -> float:
+    """Largest cell size of a graded mesh over the orifice's cell size (>= 1)."""
+    return max(1.0, scene.silo.width / scene.mesh.coarse_cells_across / scene.cell_size)
+
+
+def _graded_rows(scene: Scene) -> list[Row]:
+    """Rows of a graded mesh: square cells up to ``mesh.orifice_region`` D, then growing."""
+    s, h, me = scene.silo, scene.cell_size, scene.mesh
+    y_f = min(s.height, max(h, round(me.orifice_region * s.orifice_width / h) * h))
+    rows = [Row(0.0, y_f, max(1, round(y_f / h)))]
+    headspace = (s.height - s.fill_height) / (HEADSPACE_CELLS * h)
+    y = y_f
+    for span, n, r in graded_segments(
+        s.height - y_f, h, me.growth_rate, max(1.0, min(coarse_ratio(scene), headspace))
+    ):
+        if span > 1e-12 * s.height:
+            rows.append(Row(y, y + span, n, r))
+        y += span
+    return rows
+
+
 def vertical_rows(scene: Scene) -> list[Row]:
     """Bands of cells from the bottom to the top of the domain.
 
     Square cells (of the size at the orifice) up to ``mesh.fine_height`` (or the
     silo width), band edges at every corner of the wall and at the edges of a
     lateral orifice, then cells growing to ``mesh.top_cell_ratio`` times taller
-    (capped so that the headspace above the fill keeps two cells).
+    (capped so that the headspace above the fill keeps two cells). A graded
+    mesh (``mesh.growth_rate`` > 1) has square cells up to
+    ``mesh.orifice_region`` orifice widths, then cells growing by the growth
+    rate up to the largest cells (``mesh.coarse_cells_across``).
     """
+    if scene.mesh.graded:
+        return _graded_rows(scene)
     s = scene.silo
     h = scene.cell_size
     H = s.height
@@ -160,12 +228,15 @@ class Block:
         Growth of the cell height per cell, upward.
     sides
         Patch of the bottom, right, top and left sides (None: inside the silo).
+    x_ratio
+        Growth of the cell width per cell, towards +x.
     """
 
     corners: tuple[tuple[float, float], ...]
     cells: tuple[int, int]
     ratio: float
     sides: tuple[Side, Side, Side, Side]
+    x_ratio: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -175,6 +246,7 @@ class ProfileLayout:
     blocks: tuple[Block, ...]
     columns: tuple[int, ...]
     rows: tuple[Row, ...]
+    column_ratios: tuple[float, ...] = ()
 
     @property
     def n_cells(self) -> int:
@@ -195,6 +267,8 @@ def profile_columns(scene: Scene) -> tuple[list[tuple[float, float]], list[int],
     R = s.width / 2
     r_o = s.orifice_width / 2
     planar = scene.representation == "planar"
+    if scene.mesh.graded:
+        return _graded_columns(scene)[:3]
     if s.shape == "hopper":
         # as many cells across the outlet as there are across the orifice, but
         # never wider than COARSE_RATIO_3D cells at the top
@@ -203,16 +277,58 @@ def profile_columns(scene: Scene) -> tuple[list[tuple[float, float]], list[int],
             return [(R, -1.0), (R, 0.0), (R, 1.0)], [n, n], [ORIFICE, ORIFICE]
         return [(0.0, 0.0), (0.0, 1.0)], [n], [ORIFICE]
     if planar and s.orifice_position == "bottom":  # rectangular silo, centred slot
-        left, orf, right = slot_divisions(s.width, s.orifice_width, scene.mesh.cells_across)
+        left, orf, right = slot_divisions(s.width, s.orifice_width, scene.cells_across)
         x1, x2 = (s.width - s.orifice_width) / 2, (s.width + s.orifice_width) / 2
         edges = [(0.0, 0.0), (x1, 0.0), (x2, 0.0), (s.width, 0.0)]
         return edges, [left, orf, right], [WALLS, ORIFICE, WALLS]
     if planar:  # rectangular silo with a lateral orifice: wall to wall
-        return [(0.0, 0.0), (0.0, 2.0)], [scene.mesh.cells_across], [WALLS]
+        return [(0.0, 0.0), (0.0, 2.0)], [scene.cells_across], [WALLS]
     # axisymmetric flat-bottomed cylinder: the axis, the orifice edge, the wall
     n1 = max(1, round(r_o / h))
     n2 = max(1, round((R - r_o) / h))
     return [(0.0, 0.0), (0.0, r_o / R), (0.0, 1.0)], [n1, n2], [ORIFICE, WALLS]
+
+
+def _graded_columns(
+    scene: Scene,
+) -> tuple[list[tuple[float, float]], list[int], list[Side], list[float]]:
+    """Columns of a graded profile: the orifice, its region, then cells growing to the wall.
+
+    Returns the edges, cells and bottom patches as :func:`profile_columns`, and
+    each column's growth of the cell width towards +x.
+    """
+    s, h, me = scene.silo, scene.cell_size, scene.mesh
+    R, r_o = s.width / 2, s.orifice_width / 2
+    # from the orifice's edge to the wall: the orifice region, then growth
+    region = min(R - r_o, max(h, round(me.orifice_region * s.orifice_width / h) * h))
+    outward: list[tuple[float, int, float]] = [(region, max(1, round(region / h)), 1.0)]
+    if R - r_o - region > 1e-9 * R:
+        outward += graded_segments(R - r_o - region, h, me.growth_rate, coarse_ratio(scene))
+    if scene.representation == "axisymmetric":
+        xs, ns, rs = [0.0, r_o], [max(1, round(r_o / h))], [1.0]
+        for span, n, r in outward:
+            xs.append(xs[-1] + span)
+            ns.append(n)
+            rs.append(r)
+        xs[-1] = R
+        bottoms: list[Side] = [ORIFICE, *([WALLS] * len(outward))]
+        return [(x, 0.0) for x in xs], ns, bottoms, rs
+    # planar, centred slot: the outward bands mirrored on the left
+    n_o = max(2, round(s.orifice_width / h))
+    left_x = [R - r_o]
+    for span, _, _ in outward:
+        left_x.append(left_x[-1] - span)
+    left_x[-1] = 0.0
+    xs = [*reversed(left_x), R + r_o]
+    right = R + r_o
+    for span, _, _ in outward:
+        right += span
+        xs.append(right)
+    xs[-1] = s.width
+    ns = [n for _, n, _ in reversed(outward)] + [n_o] + [n for _, n, _ in outward]
+    rs = [1.0 / r for _, _, r in reversed(outward)] + [1.0] + [r for _, _, r in outward]
+    walls: list[Side] = [WALLS] * len(outward)
+    return [(x, 0.0) for x in xs], ns, [*walls, ORIFICE, *walls], rs
 
 
 def profile_layout(scene: Scene) -> ProfileLayout:
@@ -225,6 +341,7 @@ def profile_layout(scene: Scene) -> ProfileLayout:
     s = scene.silo
     rows = vertical_rows(scene)
     edges, ncols, bottoms = profile_columns(scene)
+    x_ratios = _graded_columns(scene)[3] if scene.mesh.graded else [1.0] * len(ncols)
     axisymmetric = scene.representation == "axisymmetric"
 
     def x(edge: tuple[float, float], y: float) -> float:
@@ -254,8 +371,9 @@ def profile_layout(scene: Scene) -> ProfileLayout:
             top = ATMOSPHERE if j == last_row else None
             left = (AXIS if axisymmetric else WALLS) if i == 0 else None
             right = right_side(row) if i == last_col else None
-            blocks.append(Block(corners, (n, row.n), row.ratio, (bottom, right, top, left)))
-    return ProfileLayout(tuple(blocks), tuple(ncols), tuple(rows))
+            sides = (bottom, right, top, left)
+            blocks.append(Block(corners, (n, row.n), row.ratio, sides, x_ratios[i]))
+    return ProfileLayout(tuple(blocks), tuple(ncols), tuple(rows), tuple(x_ratios))
 
 
 # ---------------------------------------------------------------------------- 3D cross-sections
@@ -339,7 +457,7 @@ def cells_estimate(scene: Scene) -> int:
     h = scene.cell_size
     if s.shape == "rectangular":
         W = s.thickness or h
-        return scene.mesh.cells_across * max(2, round(W / h)) * layers
+        return scene.cells_across * max(2, round(W / h)) * layers
     if s.eccentricity > 0 or (
         s.orifice_position == "lateral" and s.resolved_orifice_shape == "circular"
     ):

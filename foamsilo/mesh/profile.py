@@ -80,8 +80,9 @@ def build_profile(scene: Scene, msh_file: Path, dump_geometry: Path | None = Non
                     k = _side_of(block, a, b, tol)
                 except ValueError as exc:
                     raise s.fail(str(exc)) from None
-                if k in (0, 2):
-                    s.transfinite(c, block.cells[0])
+                if k in (0, 2):  # the cells grow towards +x: invert on a curve going -x
+                    r = block.x_ratio if b[0] > a[0] else 1.0 / block.x_ratio
+                    s.transfinite(c, block.cells[0], r)
                 else:  # the cells grow upward: invert the ratio on a downward curve
                     r = block.ratio if b[1] > a[1] else 1.0 / block.ratio
                     s.transfinite(c, block.cells[1], r)

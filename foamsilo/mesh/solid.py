@@ -175,10 +175,10 @@ def _box_section(s: Session, scene: Scene) -> tuple[Section, int]:
     ol = sil.orifice_length if sil.orifice_length is not None else W
     bottom = sil.orifice_position == "bottom"
     if bottom:
-        n_l, n_o, n_r = slot_divisions(L, sil.orifice_width, scene.mesh.cells_across)
+        n_l, n_o, n_r = slot_divisions(L, sil.orifice_width, scene.cells_across)
         xs, nx = [0.0, (L - sil.orifice_width) / 2, (L + sil.orifice_width) / 2, L], [n_l, n_o, n_r]
     else:
-        xs, nx = [0.0, L], [scene.mesh.cells_across]
+        xs, nx = [0.0, L], [scene.cells_across]
     split = ol < W - 1e-12
     zs = [0.0, (W - ol) / 2, (W + ol) / 2, W] if split else [0.0, W]
     nz = [

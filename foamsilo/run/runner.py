@@ -55,16 +55,19 @@ ProgressCallback = Callable[[LogMonitor, float], None]
 
 @dataclass
 class StepRelease:
-    """A step cap to put back in ``controlDict`` once the run is past ``time``.
+    """Step settings to put back once the run is past ``time``.
 
-    A recovered run needs its smaller step through the trouble it met, not to
-    its end: the cap is written back while the solver runs (the recovery made
-    ``controlDict`` modifiable at run time), and the solver reads it at its
-    next step. ``released_at`` is the simulated time it was put back.
+    A recovered run needs its smaller step or its extra iterations through
+    the trouble it met, not to its end: the step cap (``controlDict``
+    ``maxDeltaT``) and the outer iterations (``fvSolution`` PIMPLE
+    ``nOuterCorrectors``) are written back while the solver runs (the
+    recovery made the case modifiable at run time), and the solver reads them
+    at its next step. ``released_at`` is the simulated time they were put back.
     """
 
     time: float
     max_delta_t: float
+    outer_correctors: int | None = None
     released_at: float | None = None
 
 
@@ -107,16 +110,32 @@ class RunResult:
         return d
 
 
+def modifiable_while_running(case: Path) -> None:
+    """Let the solver read ``system/`` dictionaries changed while it runs.
+
+    ``runTimeModifiable`` on, with no modification skew: OpenFOAM otherwise
+    ignores a change made within 10 s of the last (for clocks skewed across
+    NFS); the runner writes on the machine the solver reads.
+    """
+    from foamsilo.foam import edit_dict
+
+    with edit_dict(case / "system" / "controlDict") as cd:
+        cd["runTimeModifiable"] = True
+        cd["OptimisationSwitches"] = {"fileModificationSkew": 0}
+
+
 def _release_step_cap(control: Path, release: StepRelease, now: float, log: Any) -> None:
     from foamsilo.foam import edit_dict
 
     with edit_dict(control) as cd:
         cd["maxDeltaT"] = release.max_delta_t
+    said = f"step cap put back to {release.max_delta_t:.3g} s"
+    if release.outer_correctors is not None:
+        with edit_dict(control.parent / "fvSolution") as sd:
+            sd["PIMPLE"]["nOuterCorrectors"] = release.outer_correctors
+        said += f", {release.outer_correctors} outer iterations per step"
     release.released_at = now
-    log.write(
-        f"foamsilo: past t = {release.time:.6g} s: step cap put back to "
-        f"{release.max_delta_t:.3g} s at t = {now:.6g} s\n"
-    )
+    log.write(f"foamsilo: past t = {release.time:.6g} s: {said} at t = {now:.6g} s\n")
 
 
 def _all_local(hostfile: Path | None) -> bool:

@@ -16,7 +16,7 @@ Example
 -------
 >>> from foamsilo.scene import load_preset
 >>> scene = load_preset("zhou-planar", overrides=["mesh.cells_across=16"])
->>> scene.mesh.cells_across
+>>> scene.cells_across
 16
 """
 

@@ -69,11 +69,24 @@ def format_override(key: str, value: Any) -> str:
     return f"{key}={literal}"
 
 
+#: Keys that say the same thing two ways: setting one removes the other
+ALTERNATIVES = {
+    ("mesh", "cells_across"): "cells_across_orifice",
+    ("mesh", "cells_across_orifice"): "cells_across",
+    ("material", "viscosity_cap"): "viscosity_cap_scaled",
+    ("material", "viscosity_cap_scaled"): "viscosity_cap",
+}
+
+
 def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[str, Any]:
     """Return a copy of ``data`` with ``--set`` style overrides applied.
 
     ``section.key=value`` sets a value (a TOML literal); ``section.key=`` with
     nothing after the ``=`` removes the key, so that its default applies.
+    Setting one of two keys that say the same thing two ways
+    (:data:`ALTERNATIVES`: ``mesh.cells_across`` and
+    ``mesh.cells_across_orifice``; ``material.viscosity_cap`` and
+    ``material.viscosity_cap_scaled``) removes the other.
     """
     out = copy.deepcopy(data)
     for item in overrides or []:
@@ -87,6 +100,9 @@ def apply_overrides(data: dict[str, Any], overrides: list[str] | None) -> dict[s
             node.pop(path[-1], None)
         else:
             node[path[-1]] = value
+            other = ALTERNATIVES.get((path[0], path[-1])) if len(path) == 2 else None
+            if other is not None:
+                node.pop(other, None)
     return out
 
 

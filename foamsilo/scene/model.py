@@ -259,7 +259,19 @@ class Gas:
 class Mesh:
     """Mesh resolution and representation."""
 
-    cells_across: int = _f("cells across the silo width L (the paper uses 64)", ge=4, le=2048)
+    cells_across: int | None = _f(
+        "cells across the silo width L (the paper uses 64); give this or cells_across_orifice",
+        ge=4,
+        le=2048,
+        default=None,
+    )
+    cells_across_orifice: int | None = _f(
+        "cells across the orifice D, the resolution that sets Q; the cells across L follow "
+        "as round(n L / D)",
+        ge=2,
+        le=512,
+        default=None,
+    )
     representation: Representation = _f(
         "planar (one cell thick), axisymmetric (wedge), 3d, or auto (cheapest faithful)",
         default="auto",
@@ -278,6 +290,35 @@ class Mesh:
         gt=0,
         default=None,
     )
+    growth_rate: float = _f(
+        "graded mesh: largest size ratio of neighbouring cells away from the orifice region "
+        "(1: uniform cells of L / cells_across; planar and axisymmetric bottom orifices)",
+        "",
+        ge=1,
+        le=1.5,
+        default=1.0,
+    )
+    orifice_region: float = _f(
+        "graded mesh: cells of the orifice's size reach this many orifice widths D beyond "
+        "the orifice's edges and above the floor",
+        "",
+        ge=0.25,
+        le=10,
+        default=1.0,
+    )
+    coarse_cells_across: int = _f(
+        "graded mesh: the largest cells are L / coarse_cells_across wide and tall (never "
+        "smaller than the orifice's cells; capped so that the headspace keeps two cells)",
+        "",
+        ge=2,
+        le=512,
+        default=16,
+    )
+
+    @property
+    def graded(self) -> bool:
+        """Whether cells grow away from the orifice region (``growth_rate`` > 1)."""
+        return self.growth_rate > 1.0 + 1e-12
 
 
 @dataclass(frozen=True)
@@ -551,9 +592,18 @@ class Scene:
         return math.sqrt(self.silo.orifice_width / self.gravity)
 
     @property
+    def cells_across(self) -> int:
+        """Cells across the silo width L: ``mesh.cells_across``, or from the orifice's."""
+        me = self.mesh
+        if me.cells_across is not None:
+            return me.cells_across
+        assert me.cells_across_orifice is not None
+        return max(4, round(me.cells_across_orifice * self.silo.width / self.silo.orifice_width))
+
+    @property
     def cell_size(self) -> float:
-        """Uniform cell size L / cells_across [m]."""
-        return self.silo.width / self.mesh.cells_across
+        """Cell size at the orifice, L / cells_across [m] (the uniform mesh's)."""
+        return self.silo.width / self.cells_across
 
     def to_dict(self) -> dict[str, Any]:
         """Plain nested dict (TOML-serialisable: None values dropped)."""

@@ -37,13 +37,34 @@ def validate(scene: Scene) -> None:
             f"got {m.grain_diameter:g} m; allowed: > 0 and < silo.orifice_width "
             f"({s.orifice_width:g} m)",
         )
+    if (me.cells_across is None) == (me.cells_across_orifice is None):
+        raise SceneError(
+            "mesh.cells_across",
+            "give exactly one of mesh.cells_across (cells across L) and "
+            "mesh.cells_across_orifice (cells across D)",
+        )
     cells_in_orifice = s.orifice_width / scene.cell_size
     if cells_in_orifice < 2 - 1e-9:
         need = math.ceil(2 * s.width / s.orifice_width)
         raise SceneError(
             "mesh.cells_across",
-            f"got {me.cells_across}: the orifice spans {cells_in_orifice:.2f} cells; "
+            f"got {scene.cells_across}: the orifice spans {cells_in_orifice:.2f} cells; "
             f"allowed: >= {need} (at least 2 cells across the orifice)",
+        )
+    centred_bottom = s.orifice_position == "bottom" and s.eccentricity == 0.0
+    if me.graded and not (
+        centred_bottom
+        and (
+            (scene.representation in ("planar", "axisymmetric") and s.shape != "hopper")
+            or (scene.representation == "3d" and s.shape == "cylindrical")
+        )
+    ):
+        raise SceneError(
+            "mesh.growth_rate",
+            f"got {me.growth_rate:g}: graded meshes are built for flat-bottomed silos with a "
+            "centred bottom orifice, planar, axisymmetric or 3D cylinders (this scene: "
+            f"{scene.representation}, {s.shape}, {s.orifice_position} orifice"
+            f"{', off centre' if s.eccentricity else ''}); allowed here: 1 (uniform)",
         )
     if me.fine_height is not None and me.fine_height >= s.height:
         raise SceneError(

@@ -104,23 +104,44 @@ def _recommend(cells: list[int], err: list[float], level: float) -> int | None:
     return coarsest_within(cells[:-1], err[:-1], level)
 
 
+def work_precision_series() -> list[str]:
+    """Names of the work-precision series (``name``, default: the preset)."""
+    return [e.get("name", e["preset"]) for e in study_table("suite")["work-precision"]]
+
+
 def work_precision(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool,
+    work: Path,
+    jobs: int,
+    limit: float,
+    on_row: OnRow = None,
+    series: str | None = None,
 ) -> dict[str, Any]:
-    """Steady Q against resolution and wall time, planar and axisymmetric."""
+    """Steady Q against resolution and wall time, planar and axisymmetric.
+
+    Each series is named by its ``name`` (default: its preset); ``series``
+    runs that one only. A series with no ``quick_values`` is left out of the
+    quick suite.
+    """
     from foamsilo.compare import open_top_law
     from foamsilo.scene import load_preset
 
+    entries = study_table("suite")["work-precision"]
+    names = work_precision_series()
     out: dict[str, Any] = {}
-    for entry in study_table("suite")["work-precision"]:
+    for name, entry in zip(names, entries, strict=True):
+        if (series is not None and name != series) or (quick and "quick_values" not in entry):
+            continue
         preset = entry["preset"]
         cells, cases = _series(entry, quick)
-        rows = run_rows(cases, work / preset, jobs, limit, on_row)
+        rows = run_rows(cases, work / name, jobs, limit, on_row)
         law_name, q_law = open_top_law(load_preset(preset))
         for r, n in zip(rows, cells, strict=True):
             r["cells_across"] = n
-        out[preset] = {"law": law_name, "Q_law": q_law, "rows": rows}
-        derive_work_precision(out[preset])
+        out[name] = {"law": law_name, "Q_law": q_law, "rows": rows}
+        if entry.get("about"):
+            out[name]["about"] = entry["about"]
+        derive_work_precision(out[name])
     return out
 
 
@@ -403,9 +424,21 @@ def run_suite(
 ) -> dict[str, Any]:
     """Run the suite; write ``suite[-quick].json`` and ``.md`` with plots into ``out_dir``."""
     names = only or list(ENTRIES)
-    bad = [n for n in names if n not in ENTRIES]
+    # "work-precision/NAME": one series of an entry, merged into the others
+    split = [(n.partition("/")[0], n.partition("/")[2]) for n in names]
+    series = work_precision_series()
+    bad = [
+        f"{n}/{sub}" if sub else n
+        for n, sub in split
+        if n not in ENTRIES or (sub and (n != "work-precision" or sub not in series))
+    ]
     if bad:
-        raise FoamsiloError(f"unknown suite entry {bad[0]!r}; valid: " + ", ".join(ENTRIES))
+        raise FoamsiloError(
+            f"unknown suite entry {bad[0]!r}; valid: "
+            + ", ".join(ENTRIES)
+            + "; or one series: "
+            + ", ".join(f"work-precision/{k}" for k in series)
+        )
     stem = "suite-quick" if quick else "suite"
     result: dict[str, Any] = {}
     previous = out_dir / f"{stem}.json"
@@ -416,11 +449,17 @@ def run_suite(
     commits = result.get("commits") or {k: result.get("commit") for k in ENTRIES if k in result}
     timing = result.get("wall_s", {})
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs})
-    for name in names:
+    for name, sub in split:
         t0 = time.perf_counter()
-        result[name] = ENTRIES[name](quick, Path(work_dir) / name, jobs, limit, on_row)
-        timing[name] = time.perf_counter() - t0
-        commits[name] = git_commit()
+        if sub:
+            part = work_precision(quick, Path(work_dir) / name, jobs, limit, on_row, series=sub)
+            result[name] = {**(result.get(name) or {}), **part}
+            key = f"{name}/{sub}"
+        else:
+            result[name] = ENTRIES[name](quick, Path(work_dir) / name, jobs, limit, on_row)
+            key = name
+        timing[key] = time.perf_counter() - t0
+        commits[key] = git_commit()
     result["wall_s"] = timing
     result["commits"] = commits
     result["commit"] = ", ".join(sorted(set(commits.values()), key=str))
@@ -591,8 +630,9 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "",
         ]
         for preset, data in wp.items():
+            about = f" {data['about']}" if data.get("about") else ""
             lines += [
-                f"**{preset}** (law: {data['law']}, Q = {data['Q_law']:.5g}); resolution "
+                f"**{preset}**{about} (law: {data['law']}, Q = {data['Q_law']:.5g}); resolution "
                 f"for 5%: {data['recommend_5pct'] or 'none'} across, for 2%: "
                 f"{data['recommend_2pct'] or 'none'} across (against the finest run).",
                 "",
