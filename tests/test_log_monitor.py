@@ -92,3 +92,29 @@ def test_fatal_error_is_collected_not_mistaken_for_the_banner():
     mon.feed("    Maximum number of iterations exceeded")
     assert mon.fatal[0].startswith("--> FOAM FATAL ERROR")
     assert len(mon.steps) == 2
+
+
+def test_a_volume_fraction_blowing_up_inside_a_step_is_a_divergence():
+    # thin lab silo at eta_max = 1e5 (docs/validation/suite.md): alpha left
+    # [0, 1] in the 6th outer iteration of a step, SIGFPE two iterations later
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 3)
+    ok = "Phase-1 volume fraction = 0.9259196003  Min(alpha.granular) = -2.168019742e-26  Max(alpha.granular) = 1.00000113"
+    mon.feed(ok)
+    assert mon.divergence is None
+    mon.feed(
+        "Phase-1 volume fraction = 0.9258084374  Min(alpha.granular) = -17.34392947  "
+        "Max(alpha.granular) = 20.91493569"
+    )
+    d = mon.divergence
+    assert d is not None and d.quantity == "volume fraction" and "-17.3" in d.detail
+    assert d.time == mon.steps[-1].time
+
+
+def test_a_floating_point_trap_is_a_divergence_the_runner_can_recover():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 3)
+    mon.feed("#0  Foam::error::printStack(Foam::Ostream&) at ??:?")
+    mon.feed("#1  Foam::sigFpe::sigHandler(int) at ??:?")
+    assert mon.divergence is not None and mon.divergence.quantity == "floating-point exception"
+    assert mon.fatal  # the stack is kept for the report

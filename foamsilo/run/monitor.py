@@ -22,6 +22,9 @@ from pathlib import Path
 
 COURANT_BLOWUP = 20.0
 DT_COLLAPSE = 1e-4
+#: A volume fraction this far outside [0, 1] (MULES keeps it within ~1e-6)
+#: is a blow-up inside the step's outer iterations, before any Courant check
+ALPHA_BLOWUP = 0.5
 LOG_NAME = "log.siloFoam"
 #: One row per time step of the run (written by :meth:`LogMonitor.write_table`)
 STEP_TABLE = "steps.csv"
@@ -41,6 +44,14 @@ _RE_RES = re.compile(
 )
 _RE_CONT = re.compile(r"^time step continuity errors : sum local = " + _FLOAT)
 _RE_EXEC = re.compile(r"^ExecutionTime = " + _FLOAT + r" s")
+_RE_ALPHA = re.compile(
+    r"^Phase-1 volume fraction = "
+    + _FLOAT
+    + r"\s+Min\([^)]*\) = "
+    + _FLOAT
+    + r"\s+Max\([^)]*\) = "
+    + _FLOAT
+)
 
 
 def _isbad(x: float) -> bool:
@@ -122,6 +133,9 @@ class LogMonitor:
             self._in_fatal = True
         if self._in_fatal:
             self.fatal.append(line)
+            if "sigFpe::sigHandler" in line:
+                # a floating-point trap is a blow-up the log had no line for
+                self._diverge("floating-point exception", "the solver stopped on SIGFPE")
             return
         if line == "End":
             self.end_seen = True
@@ -170,6 +184,12 @@ class LogMonitor:
             step.iterations[name] = step.iterations.get(name, 0) + int(m.group(4))
             if _isbad(r0) or _isbad(float(m.group(3))):
                 self._diverge(f"{name} residual", f"{name} residual is {r0}")
+            return
+        m = _RE_ALPHA.match(line)
+        if m:
+            lo, hi = float(m.group(2)), float(m.group(3))
+            if _isbad(lo) or _isbad(hi) or lo < -ALPHA_BLOWUP or hi > 1 + ALPHA_BLOWUP:
+                self._diverge("volume fraction", f"alpha.granular between {lo:.3g} and {hi:.3g}")
             return
         m = _RE_CONT.match(line)
         if m:
