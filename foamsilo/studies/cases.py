@@ -190,7 +190,7 @@ def machine_info() -> dict[str, Any]:
 
 
 def git_commit() -> str | None:
-    """Return the commit the studies ran at (``-dirty``: uncommitted changes), if any."""
+    """Return the commit the studies ran at (``-dirty``: uncommitted changes to the code)."""
     import os
 
     from foamsilo.process import run_command
@@ -202,7 +202,9 @@ def git_commit() -> str | None:
 
     try:
         commit = git("rev-parse", "--short", "HEAD")
-        dirty = git("status", "--porcelain", "--untracked-files=no")
+        # the code only: a study writing its report into docs/ is no change of the code
+        dirty = git("status", "--porcelain", "--untracked-files=no", "--",
+                    *(f":(top){d}" for d in ("foamsilo", "templates", "solver_src")))  # fmt: skip
     except OSError:  # no git
         return None
     return (commit + ("-dirty" if dirty else "")) or None
