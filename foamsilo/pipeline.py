@@ -228,10 +228,14 @@ def _recover(
     """Set a diverged case back to its latest complete time with more care per step.
 
     The time directory of the step that blew up (if it was a write time) is
-    removed. A run iterating each step fewer than
+    removed. A run iterating each step more than once but fewer than
     ``RECOVERY_OUTER_CORRECTORS`` times goes on with that many (``fvSolution``
-    PIMPLE ``nOuterCorrectors``); one that already does has its step capped
-    at ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``).
+    PIMPLE ``nOuterCorrectors``); any other has its step capped at
+    ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``),
+    with the scene's own iterations back where the raised ones let the
+    volume fraction blow up within a step. A scene with one evaluation of
+    the viscosity per step (planar) keeps it: made a Picard iteration, it
+    diverges within the step at high viscosity contrast (D/d = 5, measured).
     ``controlDict`` is made modifiable at run time (with no modification
     skew) so that both can be put back while the solver runs. The recovery is
     said, appended to the solver's log, and returned for ``run.json``.
@@ -245,12 +249,18 @@ def _recover(
     cap = float(dict_value(control, "maxDeltaT"))
     outer = int(dict_value(solution, "PIMPLE")["nOuterCorrectors"])
     step = exc.delta_t if exc.delta_t else cap
-    if outer < RECOVERY_OUTER_CORRECTORS:
+    if 1 < outer < RECOVERY_OUTER_CORRECTORS:
         new_cap, new_outer = cap, RECOVERY_OUTER_CORRECTORS
-        how = f"{new_outer} outer iterations per step (was {outer})"
+        how = f"{_iterations(new_outer)} per step (was {outer})"
     else:
         new_cap, new_outer = RECOVERY_STEP_FACTOR * min(step, cap), outer
-        how = f"the step capped at {new_cap:.3g} s"
+        if outer > scene.outer_correctors and exc.quantity == "volume fraction":
+            new_outer = scene.outer_correctors  # the iterations themselves blew up
+        how = f"the step capped at {new_cap:.3g} s" + (
+            f" and {new_outer} outer iterations per step (was {outer})"
+            if new_outer != outer
+            else ""
+        )
     if exc.time is not None:
         remove_times_from(case_dir, exc.time)
     with edit_dict(control) as cd:
@@ -278,6 +288,10 @@ def _recover(
         "max_delta_t": new_cap,
         "outer_correctors": new_outer,
     }
+
+
+def _iterations(n: int) -> str:
+    return f"{n} outer iteration{'s' if n != 1 else ''}"
 
 
 def _plan_release(

@@ -321,6 +321,22 @@ def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
     assert rec["max_delta_t"] == pytest.approx(5e-4) and rec["outer_correctors"] == 8
     assert float(dict_value(case / "system" / "controlDict", "maxDeltaT")) == pytest.approx(5e-4)
     assert dict_value(case / "system" / "controlDict", "runTimeModifiable") in (True, "yes")
+    # a planar scene's one evaluation per step is kept: the step is halved
+    planar = load_preset("zhou-planar", ["mesh.cells_across=16"])
+    one = create_case(planar, tmp_path / "one", openfoam).path
+    rec = _recover(one, DivergenceError("Courant number", None, "", None, one, 1e-3), 1, planar,
+                   lambda _: None)  # fmt: skip
+    assert rec["outer_correctors"] == 1 and rec["max_delta_t"] == pytest.approx(5e-4)
+    # raised iterations that let the volume fraction blow up go back to the scene's
+    wedge = load_preset("zhou-cyl-bottom", ["mesh.cells_across=16"])
+    w = create_case(wedge, tmp_path / "wedge", openfoam).path
+    rec = _recover(w, DivergenceError("Courant number", None, "", None, w, 1e-3), 1, wedge,
+                   lambda _: None)  # fmt: skip
+    assert rec["outer_correctors"] == 8 and rec["max_delta_t"] == pytest.approx(wedge.delta_t_max)
+    rec = _recover(w, DivergenceError("volume fraction", None, "", None, w, 1e-3), 2, wedge,
+                   lambda _: None)  # fmt: skip
+    assert rec["outer_correctors"] == 3 and rec["max_delta_t"] == pytest.approx(5e-4)
+    assert int(dict_value(w / "system" / "fvSolution", "PIMPLE")["nOuterCorrectors"]) == 3
 
 
 def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, solver):

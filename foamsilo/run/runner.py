@@ -133,7 +133,8 @@ def _release_step_cap(control: Path, release: StepRelease, now: float, log: Any)
     if release.outer_correctors is not None:
         with edit_dict(control.parent / "fvSolution") as sd:
             sd["PIMPLE"]["nOuterCorrectors"] = release.outer_correctors
-        said += f", {release.outer_correctors} outer iterations per step"
+        n = release.outer_correctors
+        said += f", {n} outer iteration{'s' if n != 1 else ''} per step"
     release.released_at = now
     log.write(f"foamsilo: past t = {release.time:.6g} s: {said} at t = {now:.6g} s\n")
 
