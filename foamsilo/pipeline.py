@@ -223,7 +223,12 @@ RELEASE_AFTER = 1.0
 
 
 def _recover(
-    case_dir: Path, exc: DivergenceError, k: int, scene: Scene, say: Say
+    case_dir: Path,
+    exc: DivergenceError,
+    k: int,
+    scene: Scene,
+    say: Say,
+    iterations_failed: bool = False,
 ) -> dict[str, Any]:
     """Set a diverged case back to its latest complete time with more care per step.
 
@@ -233,7 +238,8 @@ def _recover(
     PIMPLE ``nOuterCorrectors``); any other has its step capped at
     ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``),
     with the scene's own iterations back where the raised ones let the
-    volume fraction blow up within a step. A scene with one evaluation of
+    volume fraction blow up within a step (``iterations_failed``: they did
+    so earlier in this run, and are not raised again). A scene with one evaluation of
     the viscosity per step (planar) keeps it: made a Picard iteration, it
     diverges within the step at high viscosity contrast (D/d = 5, measured).
     ``controlDict`` is made modifiable at run time (with no modification
@@ -249,12 +255,13 @@ def _recover(
     cap = float(dict_value(control, "maxDeltaT"))
     outer = int(dict_value(solution, "PIMPLE")["nOuterCorrectors"])
     step = exc.delta_t if exc.delta_t else cap
-    if 1 < outer < RECOVERY_OUTER_CORRECTORS:
+    blew_up = outer > scene.outer_correctors and exc.quantity == "volume fraction"
+    if 1 < outer < RECOVERY_OUTER_CORRECTORS and not iterations_failed:
         new_cap, new_outer = cap, RECOVERY_OUTER_CORRECTORS
         how = f"{_iterations(new_outer)} per step (was {outer})"
     else:
         new_cap, new_outer = RECOVERY_STEP_FACTOR * min(step, cap), outer
-        if outer > scene.outer_correctors and exc.quantity == "volume fraction":
+        if blew_up:
             new_outer = scene.outer_correctors  # the iterations themselves blew up
         how = f"the step capped at {new_cap:.3g} s" + (
             f" and {new_outer} outer iterations per step (was {outer})"
@@ -287,6 +294,7 @@ def _recover(
         "restart_time": float(restart),
         "max_delta_t": new_cap,
         "outer_correctors": new_outer,
+        "iterations_blew_up": blew_up,
     }
 
 
@@ -418,7 +426,8 @@ def run(
                     _record(case_dir, "diverged", n_procs=ranks, error=_error_record(exc),
                             recoveries=recoveries, **spent())  # fmt: skip
                     raise
-                recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say))
+                failed = any(r.get("iterations_blew_up") for r in recoveries)
+                recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say, failed))
                 recoveries[-1]["after_wall_seconds"] = time.perf_counter() - wall0
                 release = _plan_release(recoveries[-1], scene, released_before, case_dir, say)
             except RunInterruptedError as exc:

@@ -337,6 +337,10 @@ def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
                    lambda _: None)  # fmt: skip
     assert rec["outer_correctors"] == 3 and rec["max_delta_t"] == pytest.approx(5e-4)
     assert int(dict_value(w / "system" / "fvSolution", "PIMPLE")["nOuterCorrectors"]) == 3
+    # and are not raised again in that run
+    rec = _recover(w, DivergenceError("Courant number", None, "", None, w, 2e-4), 3, wedge,
+                   lambda _: None, iterations_failed=True)  # fmt: skip
+    assert rec["outer_correctors"] == 3 and rec["max_delta_t"] == pytest.approx(1e-4)
 
 
 def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, solver):
