@@ -59,6 +59,7 @@ from foamsilo.errors import (
 from foamsilo.foam import reconstruct_par
 from foamsilo.jsonio import dumps, jsonable
 from foamsilo.post import reduce_case
+from foamsilo.post.steady import START
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
 from foamsilo.run import ProgressCallback, RunResult, StepRelease, run_solver
@@ -210,9 +211,11 @@ def _record(case_dir: Path, status: str, **data: Any) -> None:
 
 #: A recovery caps the step at this fraction of the step the run diverged with
 RECOVERY_STEP_FACTOR = 0.5
-#: The first recovery iterates each step this many times (PIMPLE outer
-#: correctors) instead: the start-up blow-up of the wedges is the mu(I)
-#: viscosity's Picard iteration not converging, not too long a step
+#: A recovery from a start-up divergence (within the steady window's start-up,
+#: ``foamsilo.post.steady.START`` discharge times) iterates each step this
+#: many times (PIMPLE outer correctors) instead: the wedges' start-up blow-up
+#: is the mu(I) viscosity's Picard iteration not converging, not too long a
+#: step; later in a discharge the raised iterations blow up themselves
 #: (docs/solver.md)
 RECOVERY_OUTER_CORRECTORS = 8
 #: The scene's own step cap is put back once the run is this many discharge
@@ -233,13 +236,14 @@ def _recover(
     """Set a diverged case back to its latest complete time with more care per step.
 
     The time directory of the step that blew up (if it was a write time) is
-    removed. A run iterating each step more than once but fewer than
-    ``RECOVERY_OUTER_CORRECTORS`` times goes on with that many (``fvSolution``
-    PIMPLE ``nOuterCorrectors``); any other has its step capped at
+    removed. A run that diverged in its start-up, iterating each step more
+    than once but fewer than ``RECOVERY_OUTER_CORRECTORS`` times, goes on
+    with that many (``fvSolution`` PIMPLE ``nOuterCorrectors``); any other
+    has its step capped at
     ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``),
-    with the scene's own iterations back where the raised ones let the
-    volume fraction blow up within a step (``iterations_failed``: they did
-    so earlier in this run, and are not raised again). A scene with one evaluation of
+    with the scene's own iterations back where the raised ones diverged
+    (``iterations_failed``: they did so earlier in this run, and are not
+    raised again). A scene with one evaluation of
     the viscosity per step (planar) keeps it: made a Picard iteration, it
     diverges within the step at high viscosity contrast (D/d = 5, measured).
     ``controlDict`` is made modifiable at run time (with no modification
@@ -255,8 +259,10 @@ def _recover(
     cap = float(dict_value(control, "maxDeltaT"))
     outer = int(dict_value(solution, "PIMPLE")["nOuterCorrectors"])
     step = exc.delta_t if exc.delta_t else cap
-    blew_up = outer > scene.outer_correctors and exc.quantity == "volume fraction"
-    if 1 < outer < RECOVERY_OUTER_CORRECTORS and not iterations_failed:
+    # raised iterations that diverge, in whatever quantity, are no cure here
+    blew_up = outer > scene.outer_correctors
+    start_up = exc.time is None or exc.time <= START * scene.discharge_time_scale
+    if 1 < outer < RECOVERY_OUTER_CORRECTORS and start_up and not iterations_failed:
         new_cap, new_outer = cap, RECOVERY_OUTER_CORRECTORS
         how = f"{_iterations(new_outer)} per step (was {outer})"
     else:
