@@ -252,7 +252,7 @@ def _recover(
     """
     from foamsilo.case.times import remove_times_from
     from foamsilo.foam import dict_value, edit_dict
-    from foamsilo.run import LOG_NAME, modifiable_while_running
+    from foamsilo.run import modifiable_while_running
 
     control = case_dir / "system" / "controlDict"
     solution = case_dir / "system" / "fvSolution"
@@ -270,9 +270,7 @@ def _recover(
         if blew_up:
             new_outer = scene.outer_correctors  # the iterations themselves blew up
         how = f"the step capped at {new_cap:.3g} s" + (
-            f" and {new_outer} outer iterations per step (was {outer})"
-            if new_outer != outer
-            else ""
+            f" and {_iterations(new_outer)} per step (was {outer})" if new_outer != outer else ""
         )
     if exc.time is not None:
         remove_times_from(case_dir, exc.time)
@@ -289,9 +287,7 @@ def _recover(
         f"t = {exc.time} s with steps of {step:.3g} s; restarting from t = {restart} s with "
         f"{how}"
     )
-    say(line.removeprefix("foamsilo: "))
-    with open(case_dir / LOG_NAME, "a") as log:
-        log.write(line + "\n")
+    _say_and_log(case_dir, line, say)
     return {
         "quantity": exc.quantity,
         "time": exc.time,
@@ -302,6 +298,15 @@ def _recover(
         "outer_correctors": new_outer,
         "iterations_blew_up": blew_up,
     }
+
+
+def _say_and_log(case_dir: Path, line: str, say: Say) -> None:
+    """Say a ``foamsilo:`` line and append it to the solver's log."""
+    from foamsilo.run import LOG_NAME
+
+    say(line.removeprefix("foamsilo: "))
+    with open(case_dir / LOG_NAME, "a") as log:
+        log.write(line + "\n")
 
 
 def _iterations(n: int) -> str:
@@ -316,16 +321,12 @@ def _plan_release(
     A run that diverged again after they were put back keeps its recovery's
     settings to the end.
     """
-    from foamsilo.run import LOG_NAME
-
     if released_before:
         line = (
             "foamsilo: it diverged after its step settings were put back: the recovery's "
             "are kept to the end"
         )
-        say(line.removeprefix("foamsilo: "))
-        with open(case_dir / LOG_NAME, "a") as log:
-            log.write(line + "\n")
+        _say_and_log(case_dir, line, say)
         record["release_time"] = None
         return None
     diverged_at = record["time"] if record["time"] is not None else record["restart_time"]

@@ -340,8 +340,11 @@ def profile_layout(scene: Scene) -> ProfileLayout:
     """
     s = scene.silo
     rows = vertical_rows(scene)
-    edges, ncols, bottoms = profile_columns(scene)
-    x_ratios = _graded_columns(scene)[3] if scene.mesh.graded else [1.0] * len(ncols)
+    if scene.mesh.graded:
+        edges, ncols, bottoms, x_ratios = _graded_columns(scene)
+    else:
+        edges, ncols, bottoms = profile_columns(scene)
+        x_ratios = [1.0] * len(ncols)
     axisymmetric = scene.representation == "axisymmetric"
 
     def x(edge: tuple[float, float], y: float) -> float:
