@@ -106,3 +106,21 @@ def test_report_rewritten_from_the_json_alone(tmp_path):
     assert "extrapolated Q = 0.034" in md and "observed order p = 1.00" in md
     with pytest.raises(FoamsiloError, match="no suite results"):
         rewrite_report(True, tmp_path)
+
+
+def test_one_work_precision_series_is_named_and_a_wrong_one_listed(tmp_path):
+    from foamsilo.studies.cases import study_table
+    from foamsilo.studies.suite import run_suite, work_precision_series
+
+    names = work_precision_series()
+    assert {"zhou-planar", "zhou-cyl-bottom", "zhou-cyl-bottom-graded"} <= set(names)
+    # the graded series are in the full suite only (no quick_values)
+    entries = dict(zip(names, study_table("suite")["work-precision"], strict=True))
+    assert "quick_values" not in entries["zhou-cyl-bottom-graded"]
+    with pytest.raises(
+        FoamsiloError, match=r"work-precision/nope.*work-precision/zhou-planar-graded"
+    ):
+        run_suite(False, tmp_path, tmp_path, only=["work-precision/nope"])
+    with pytest.raises(FoamsiloError, match=r"'beverloo/venier'"):
+        run_suite(False, tmp_path, tmp_path, only=["beverloo/venier"])
+    assert not any(tmp_path.iterdir())  # refused before anything ran or was written
