@@ -124,3 +124,27 @@ def test_one_work_precision_series_is_named_and_a_wrong_one_listed(tmp_path):
     with pytest.raises(FoamsiloError, match=r"'beverloo/venier'"):
         run_suite(False, tmp_path, tmp_path, only=["beverloo/venier"])
     assert not any(tmp_path.iterdir())  # refused before anything ran or was written
+
+
+def test_time_step_rows_are_judged_against_the_default_step():
+    from foamsilo.studies.suite import derive_time_step
+
+    def row(c, q, outcome="steady", q_std=1e-5):
+        return {"courant": c, "Q": q, "Q_std": q_std, "outcome": outcome}
+
+    scenes = [
+        {"label": "converged", "rows": [row(0.5, 0.0300), row(0.25, 0.02991)]},
+        # a smaller step drops Q by 4% and makes it swing by 2.4%: both visible
+        {"label": "step-bound", "rows": [row(0.5, 0.0310), row(0.25, 0.02976, q_std=7.1e-4)]},
+        {"label": "stopped", "rows": [row(0.5, 0.0300), row(0.25, None, "stopped: diverged")]},
+    ]
+    data = {"rows": [r for s in scenes for r in s["rows"]], "scenes": scenes}
+    derive_time_step(data)
+    assert scenes[0]["rows"][1]["vs_default_step"] == pytest.approx(-0.003, rel=1e-9)
+    assert scenes[1]["rows"][1]["vs_default_step"] == pytest.approx(-0.04, rel=1e-9)
+    assert scenes[1]["rows"][1]["spread"] == pytest.approx(7.1e-4 / 0.02976, rel=1e-9)
+    by_name = {c.name: c for c in checks({"time-step": data})}
+    assert by_name["converged, Courant 0.25: Q against Courant 0.5"].passed  # -0.3%, within 1%
+    assert not by_name["step-bound, Courant 0.25: Q against Courant 0.5"].passed
+    assert not by_name["stopped, Courant 0.25: Q against Courant 0.5"].passed  # no Q: fails
+    assert len(by_name) == 3  # the reference rows are not checked against themselves

@@ -380,6 +380,12 @@ class Numerics:
         "Rhie-Chow ddtCorr in the projection (off: more robust above Courant 0.5)",
         default=True,
     )
+    open_boundary_acceleration: Literal["cell", "face"] = _f(
+        "old pressure acceleration on the orifice and the open top in the projection: the "
+        "cell's, extrapolated (the scheme so far), or the face's own, which removes a part "
+        "of the outflow that grows with the step (docs/solver.md)",
+        default="cell",
+    )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
         "latest pressure and strain rate; default: 1 planar, 3 axisymmetric and 3D (why: "

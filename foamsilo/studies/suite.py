@@ -27,6 +27,9 @@ Entries
 ``cap``
     Q at the lowest and highest viscosity cap (1e2 and 1e5 rho sqrt(g L^3)):
     planar, axisymmetric, 3D and gas-assisted scenes.
+``time-step``
+    Q on a fixed mesh at the default Courant limits and at smaller ones:
+    whether a steady rate is converged in time (full suite only).
 """
 
 from __future__ import annotations
@@ -332,6 +335,55 @@ def cap_independence(
     return {"rows": rows, "pairs": pairs}
 
 
+# ------------------------------------------------------------------ time step
+def time_step_independence(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Each scene at a fixed mesh and several Courant limits (``suite.toml`` [time-step]).
+
+    Both the all-cell and the free-surface limit take each value; the first
+    value of a scene is its reference. Not part of the quick suite.
+    """
+    table = study_table("suite")["time-step"]
+    if quick:
+        return {"rows": [], "scenes": []}
+    entries = table["cases"]
+    plan = [(e, list(e.get("courants", table["courants"]))) for e in entries]
+    cases = [
+        StudyCase(f"{e['label']}, Courant {c:g}", e["preset"],
+                  [*overrides(e.get("set")), f"run.max_courant={c!r}",
+                   f"run.max_interface_courant={c!r}"])
+        for e, courants in plan
+        for c in courants
+    ]  # fmt: skip
+    rows = run_rows(cases, work / "time-step", jobs, limit, on_row)
+    it = iter(rows)
+    scenes = []
+    for e, courants in plan:
+        mine = [next(it) for _ in courants]
+        for r, c in zip(mine, courants, strict=True):
+            r["courant"] = c
+        scenes.append({"label": e["label"], "rows": mine})
+    out = {"rows": rows, "scenes": scenes}
+    derive_time_step(out)
+    return out
+
+
+def derive_time_step(data: dict[str, Any]) -> None:
+    """Each row's change of Q against its scene's first (default) Courant limit.
+
+    Also the relative spread of the rate in the steady window (``Q_std / Q``):
+    a rate that swings from step to step at a small step is the signature of
+    a numerical oscillation, not of the flow.
+    """
+    for scene in data["scenes"]:
+        ref = scene["rows"][0].get("Q") if scene["rows"][0].get("outcome") == "steady" else None
+        for r in scene["rows"]:
+            q = r.get("Q") if r.get("outcome") == "steady" else None
+            r["vs_default_step"] = q / ref - 1 if q and ref else None
+            r["spread"] = r["Q_std"] / r["Q"] if r.get("Q") and r.get("Q_std") else None
+
+
 # --------------------------------------------------------------------- suite
 ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
     "work-precision": work_precision,
@@ -339,6 +391,7 @@ ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
     "gas-lab": gas_lab,
     "extremes": extremes,
     "cap": cap_independence,
+    "time-step": time_step_independence,
 }
 
 
@@ -410,6 +463,13 @@ def checks(result: dict[str, Any]) -> list[Check]:
         for pair in cap["pairs"]:
             out.append(check("cap-independence", f"{pair['label']}: Q(1e5)/Q(1e2) - 1",
                              pair.get("change")))  # fmt: skip
+    ts = result.get("time-step")
+    if ts:
+        for scene in ts["scenes"]:
+            first = scene["rows"][0]["courant"]
+            for r in scene["rows"][1:]:
+                name = f"{scene['label']}, Courant {r['courant']:g}: Q against Courant {first:g}"
+                out.append(check("time-step", name, r.get("vs_default_step")))
     return out
 
 
@@ -488,6 +548,8 @@ def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
             row.update(record_fields(case_dir))
     for data in (result.get("work-precision") or {}).values():
         derive_work_precision(data)
+    if result.get("time-step"):
+        derive_time_step(result["time-step"])
     return write_report(result, out_dir, stem)
 
 
@@ -741,6 +803,29 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 f"| {pair['label']} | {caps} | {qs} | {fmt(pair.get('change'), '+.2%')} "
                 f"| {' / '.join(pair['outcomes'])} |"
             )
+        lines.append("")
+    ts = result.get("time-step")
+    if ts and ts["scenes"]:
+        lines += [
+            "## Q against the time step",
+            "",
+            "Each scene on a fixed mesh at its default Courant limits (0.5) and at smaller "
+            "ones (the all-cell and the free-surface limit both set to the value). "
+            "Spread: the standard deviation of the instantaneous rate in the steady "
+            "window over Q (a rate swinging from step to step is a numerical oscillation).",
+            "",
+            "| scene | Courant | outcome | Q | vs default step | spread | Δt median [s] "
+            "| steps | CPU [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for scene in ts["scenes"]:
+            for r in scene["rows"]:
+                lines.append(
+                    f"| {scene['label']} | {r['courant']:g} | {r['outcome']} "
+                    f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('vs_default_step'), '+.2%')} "
+                    f"| {fmt(r.get('spread'), '.2%')} | {fmt(r.get('dt_median'), '.3g')} "
+                    f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('cpu_s'), '.0f')} |"
+                )
         lines.append("")
     lines += [
         "## Checks",
