@@ -215,3 +215,22 @@ def test_the_window_is_judged_on_the_orifice_time_scale():
     assert st.steady, st.reason
     assert st.t_end - st.t_start < T_L  # a plateau the silo width's scale would refuse
     assert st.q == pytest.approx(1e-3, rel=1e-3)
+
+
+def test_a_rate_swinging_from_step_to_step_is_told_from_a_slow_wander():
+    from foamsilo.post.steady import STEP_SWING_WARNING, step_swing
+
+    # the lab silo's second branch at small steps: +-3% with a period of 4 steps
+    scene, d = synthetic(q_plateau=1e-3, t_end=1.0, tau=0.02)
+    k = np.arange(d.time.size)
+    d.volume_flux = d.volume_flux * (1 + 0.03 * np.sin(np.pi * k / 2 + 0.3))
+    st = find_steady(d, scene)
+    assert st.steady  # the mean is flat: the steady test alone cannot see it
+    # a sine of amplitude a has std a/sqrt(2); its step-to-step swing is the
+    # same at a period of 4 steps (quarter-period differences are a sqrt(2))
+    assert st.step_swing == pytest.approx(0.03 / np.sqrt(2), rel=0.02)
+    assert st.step_swing > STEP_SWING_WARNING
+    # the same 3% as a slow wander (a period of 0.25 s, 1000 steps): no swing
+    slow = 1e-3 * (1 + 0.03 * np.sin(2 * np.pi * d.time / 0.25))
+    assert step_swing(slow) < 0.02 * STEP_SWING_WARNING
+    assert np.std(slow) / np.mean(slow) > 0.02  # though its std is as large

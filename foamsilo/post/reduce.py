@@ -27,7 +27,7 @@ from foamsilo.post.pore_pressure import (
     pore_pressure,
     pore_pressure_scaled,
 )
-from foamsilo.post.steady import SteadyState, find_steady
+from foamsilo.post.steady import STEP_SWING_WARNING, SteadyState, find_steady
 from foamsilo.scene import Scene, load_scene_file
 
 
@@ -114,6 +114,7 @@ class Reduction:
             else None,
             "drift": finite(st.drift),
             "excursion": finite(st.excursion),
+            "Q_step_swing": finite(st.step_swing),
             "fill_height_end_m": float(d.volume[-1] / sc.cross_section_area),
             "mass_balance_rel_error": d.mass_balance_error,
             "lost_through_top_rel": d.top_loss,
@@ -162,6 +163,13 @@ def reduce_case(case: Path) -> Reduction:
     d = read_discharge(case, scene)
     st = find_steady(d, scene)
     red = Reduction(case, scene, meta.get("cells"), d, st, warnings=_coverage_warnings(case, d))
+    if st.steady and st.step_swing > STEP_SWING_WARNING:
+        red.warnings.append(
+            f"the steady rate swings by {st.step_swing:.1%} from one step to the next (more "
+            f"than {STEP_SWING_WARNING:.0%}): a numerical oscillation, and its mean may be off "
+            "by more than that; where the Courant limits were lowered, raise "
+            "numerics.outer_correctors with them (docs/solver.md, 'Q against the time step')"
+        )
     if scene.gas_coupled and st.steady:
         red.pore_pressure = pore_pressure(case, scene, d, st)
         plot_pore_pressure(red.pore_pressure, scene, case / PORE_PRESSURE_PNG)

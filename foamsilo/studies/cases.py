@@ -133,6 +133,7 @@ def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
         fill_height_end_m=s.get("fill_height_end_m"),
         simulated_time_s=s.get("simulated_time_s"),
         Q_time_error=s.get("Q_time_error"),
+        Q_step_swing=s.get("Q_step_swing"),
     )
 
 
