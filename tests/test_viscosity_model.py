@@ -98,3 +98,23 @@ def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoa
     with pytest.raises(FoamError) as err:
         run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
     assert "pGranular" in err.value.output and "muICoeffs.pName" in err.value.output
+
+
+@pytest.mark.parametrize(("value", "words"), [("faces", "must be face or cell, not faces"),
+                                              (None, "openBoundaryAcceleration")])  # fmt: skip
+def test_the_open_boundary_acceleration_is_required_and_checked(tmp_path, openfoam, solver,
+                                                                value, words):  # fmt: skip
+    """A hand-edited fvSolution with no or a wrong PIMPLE.openBoundaryAcceleration stops."""
+    from foamsilo.errors import FoamError
+    from foamsilo.foam import edit_dict
+
+    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01})
+    case = create_case(scene, tmp_path / "oba", openfoam).path
+    with edit_dict(case / "system" / "fvSolution") as fv:
+        if value is None:
+            del fv["PIMPLE"]["openBoundaryAcceleration"]
+        else:
+            fv["PIMPLE"]["openBoundaryAcceleration"] = value
+    with pytest.raises(FoamError) as err:
+        run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    assert words in err.value.output
