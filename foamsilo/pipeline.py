@@ -62,7 +62,7 @@ from foamsilo.post import reduce_case
 from foamsilo.post.steady import START
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
-from foamsilo.run import ProgressCallback, RunResult, StepRelease, run_solver
+from foamsilo.run import ProgressCallback, RunResult, StepRelease, outer_iterations, run_solver
 from foamsilo.scene import Scene, is_scene_file, load_scene, load_scene_file, scene_digest
 from foamsilo.solver import ensure_solver
 from foamsilo.summary import RunSummary, write_summary
@@ -264,13 +264,15 @@ def _recover(
     start_up = exc.time is None or exc.time <= START * scene.discharge_time_scale
     if 1 < outer < RECOVERY_OUTER_CORRECTORS and start_up and not iterations_failed:
         new_cap, new_outer = cap, RECOVERY_OUTER_CORRECTORS
-        how = f"{_iterations(new_outer)} per step (was {outer})"
+        how = f"{outer_iterations(new_outer)} per step (was {outer})"
     else:
         new_cap, new_outer = RECOVERY_STEP_FACTOR * min(step, cap), outer
         if blew_up:
             new_outer = scene.outer_correctors  # the iterations themselves blew up
         how = f"the step capped at {new_cap:.3g} s" + (
-            f" and {_iterations(new_outer)} per step (was {outer})" if new_outer != outer else ""
+            f" and {outer_iterations(new_outer)} per step (was {outer})"
+            if new_outer != outer
+            else ""
         )
     if exc.time is not None:
         remove_times_from(case_dir, exc.time)
@@ -307,10 +309,6 @@ def _say_and_log(case_dir: Path, line: str, say: Say) -> None:
     say(line.removeprefix("foamsilo: "))
     with open(case_dir / LOG_NAME, "a") as log:
         log.write(line + "\n")
-
-
-def _iterations(n: int) -> str:
-    return f"{n} outer iteration{'s' if n != 1 else ''}"
 
 
 def _plan_release(

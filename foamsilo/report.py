@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from foamsilo.case import write_whole
+from foamsilo.run import outer_iterations
 from foamsilo.summary import RunSummary
 
 REPORT_MD = "report.md"
@@ -185,7 +186,7 @@ def case_report(summary: RunSummary) -> Path:
                 f"{_fmt(r['restart_time'], '.6g')} s with the step capped at "
                 f"{_fmt(r['max_delta_t'], '.3g')} s"
                 + (
-                    f", {r['outer_correctors']} outer iterations per step"
+                    f", {outer_iterations(r['outer_correctors'])} per step"
                     if r.get("outer_correctors")
                     else ""
                 )

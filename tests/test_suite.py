@@ -138,7 +138,7 @@ def test_time_step_rows_are_judged_against_the_default_step():
         {"label": "step-bound", "rows": [row(0.5, 0.0310), row(0.25, 0.02976, q_std=7.1e-4)]},
         {"label": "stopped", "rows": [row(0.5, 0.0300), row(0.25, None, "stopped: diverged")]},
     ]
-    data = {"rows": [r for s in scenes for r in s["rows"]], "scenes": scenes}
+    data = {"scenes": scenes}
     derive_time_step(data)
     assert scenes[0]["rows"][1]["vs_default_step"] == pytest.approx(-0.003, rel=1e-9)
     assert scenes[1]["rows"][1]["vs_default_step"] == pytest.approx(-0.04, rel=1e-9)

@@ -124,6 +124,11 @@ def modifiable_while_running(case: Path) -> None:
         cd["OptimisationSwitches"] = {"fileModificationSkew": 0}
 
 
+def outer_iterations(n: int) -> str:
+    """Return ``"n outer iteration(s)"``, as the log, the terminal and the report say it."""
+    return f"{n} outer iteration{'s' if n != 1 else ''}"
+
+
 def _release_step_cap(control: Path, release: StepRelease, now: float, log: Any) -> None:
     from foamsilo.foam import edit_dict
 
@@ -133,8 +138,7 @@ def _release_step_cap(control: Path, release: StepRelease, now: float, log: Any)
     if release.outer_correctors is not None:
         with edit_dict(control.parent / "fvSolution") as sd:
             sd["PIMPLE"]["nOuterCorrectors"] = release.outer_correctors
-        n = release.outer_correctors
-        said += f", {n} outer iteration{'s' if n != 1 else ''} per step"
+        said += f", {outer_iterations(release.outer_correctors)} per step"
     release.released_at = now
     log.write(f"foamsilo: past t = {release.time:.6g} s: {said} at t = {now:.6g} s\n")
 

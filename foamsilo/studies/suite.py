@@ -346,7 +346,7 @@ def time_step_independence(
     """
     table = study_table("suite")["time-step"]
     if quick:
-        return {"rows": [], "scenes": []}
+        return {"scenes": []}
     entries = table["cases"]
     plan = [(e, list(e.get("courants", table["courants"]))) for e in entries]
     cases = [
@@ -356,15 +356,14 @@ def time_step_independence(
         for e, courants in plan
         for c in courants
     ]  # fmt: skip
-    rows = run_rows(cases, work / "time-step", jobs, limit, on_row)
-    it = iter(rows)
+    it = iter(run_rows(cases, work / "time-step", jobs, limit, on_row))
     scenes = []
     for e, courants in plan:
         mine = [next(it) for _ in courants]
         for r, c in zip(mine, courants, strict=True):
             r["courant"] = c
         scenes.append({"label": e["label"], "rows": mine})
-    out = {"rows": rows, "scenes": scenes}
+    out = {"scenes": scenes}
     derive_time_step(out)
     return out
 
@@ -372,9 +371,8 @@ def time_step_independence(
 def derive_time_step(data: dict[str, Any]) -> None:
     """Each row's change of Q against its scene's first (default) Courant limit.
 
-    Also the relative spread of the rate in the steady window (``Q_std / Q``):
-    a rate that swings from step to step at a small step is the signature of
-    a numerical oscillation, not of the flow.
+    Also the relative spread of the rate in the steady window (``Q_std / Q``),
+    shown beside its step-to-step part (``Q_step_swing``).
     """
     for scene in data["scenes"]:
         ref = scene["rows"][0].get("Q") if scene["rows"][0].get("outcome") == "steady" else None
