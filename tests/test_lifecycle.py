@@ -324,3 +324,34 @@ def test_a_temporary_case_left_by_kill_9_is_removed_by_the_next_one(tmp_path, op
     code, out = cli("new", "zhou-planar", "-o", str(tmp_path / "c"), *sets(PLANAR_16))
     assert code == 0, out
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c"]
+
+
+@pytest.mark.openfoam
+def test_a_rate_swinging_from_step_to_step_is_warned_of(finished, tmp_path):
+    """The same run with its orifice flux smoothed, then made to swing +-3% every step."""
+    import numpy as np
+
+    def rewrite(c: Path, swing: float) -> None:
+        dat = next((c / "postProcessing" / "orificeFlow" / "0").glob("*.dat"))
+        lines = dat.read_text().splitlines(keepends=True)
+        head = [x for x in lines if x.startswith("#")]
+        rows = np.array([[float(v) for v in x.split()] for x in lines if not x.startswith("#")])
+        k = np.arange(len(rows))
+        padded = np.pad(rows[:, 1], 20, mode="edge")  # no dip at the ends
+        smooth = np.convolve(padded, np.ones(41) / 41, mode="valid")
+        rows[:, 1] = smooth * (1 + swing * (-1.0) ** k)
+        dat.write_text("".join(head) + "".join("\t".join(f"{v:.10e}" for v in r) + "\n"
+                                               for r in rows))  # fmt: skip
+
+    calm, swinging = _copy(finished[0], tmp_path / "calm"), _copy(finished[0], tmp_path / "swing")
+    rewrite(calm, 0.0)
+    rewrite(swinging, 0.03)
+    code, s = cli("post", str(calm))
+    assert code == 0 and s["steady"], s
+    assert s["Q_step_swing"] < 0.01 and not any("swings" in w for w in s["warnings"])
+    code, s = cli("post", str(swinging))
+    assert code == 0 and s["steady"], s  # the mean is as flat as before
+    # +-a every step: the step-to-step change is 2a, over sqrt(2): sqrt(2) a
+    assert s["Q_step_swing"] == pytest.approx(0.03 * np.sqrt(2), rel=0.05)
+    assert any("swings by 4.2%" in w for w in s["warnings"]), s["warnings"]
+    assert "swings by 4.2%" in (swinging / "report.md").read_text()
