@@ -24,16 +24,18 @@ pytestmark = pytest.mark.openfoam
 G0 = 10.0  # 1/s
 
 
-def mu_i_nu(p, shear, d, rho, mus, dmu, i0, eta_max, p_min):
+def mu_i_nu(p, shear, d, rho, law, eta_max, p_min):
     """Reference implementation of Zhou et al. eq. 9 with the cap and floor."""
     pp = np.maximum(p, p_min)
     inertial = shear * d / np.sqrt(pp / rho)
-    mu = mus + dmu / (i0 / inertial + 1)
+    mu = np.vectorize(law.mu)(inertial)
     return np.minimum(mu * pp / shear, eta_max) / rho
 
 
-def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
-    scene = coarse_planar()
+@pytest.mark.parametrize("rheology", ["mu-i", "barker-gray"])
+def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver, rheology):
+    """The plain law, and Barker & Gray's regularised one (its I1 and A from C++)."""
+    scene = coarse_planar(**{"material.rheology": rheology})
     case = create_case(scene, tmp_path / "visc", openfoam).path
     frozen_flow_step(case, 1e-7)
     run_utility(openfoam, case, "postProcess", "-func", "writeCellCentres", "-time", "0")
@@ -61,9 +63,8 @@ def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
     assert np.allclose(p, p_target, rtol=1e-6, atol=1e-6)
 
     m = scene.material
-    expected = mu_i_nu(
-        p, G0, m.grain_diameter, m.density, m.mu_s, m.delta_mu, m.i0, scene.eta_max, scene.p_min
-    )
+    law = m.friction_law
+    expected = mu_i_nu(p, G0, m.grain_diameter, m.density, law, scene.eta_max, scene.p_min)
     dx = scene.cell_size
     # away from the side walls (no-slip breaks the uniform shear there) and
     # the top and bottom boundaries
@@ -83,6 +84,36 @@ def test_solver_viscosity_is_capped_mu_i(tmp_path, openfoam, solver):
     rising = inertial > 0.1
     assert rising.sum() > 20 and np.all(mu_eff[rising] > m.mu_s + 0.05)
     assert mu_eff.max() < m.mu_s + m.delta_mu
+    # ... and, regularised, the low-I curve below I1, uncapped, where it is
+    # more than 1% under the plain law
+    if rheology == "barker-gray":
+        below = (inertial < 0.5 * law.i1) & ~np.isclose(eta, scene.eta_max, rtol=1e-9)
+        assert below.sum() > 20
+        plain = np.vectorize(law.plain)(inertial[below])
+        assert np.all(mu_eff[below] < 0.99 * plain)
+
+
+@pytest.mark.parametrize(("edit", "words"), [({"alpha": 2.5}, "0 < alpha < 2"),
+                                             ({"muInf": None}, "muInf")])  # fmt: skip
+def test_regularised_law_coefficients_are_required_and_checked(tmp_path, openfoam, solver,
+                                                               edit, words):  # fmt: skip
+    """A hand-edited muIRegularisedCoeffs with alpha out of range, or no muInf, stops."""
+    from foamsilo.errors import FoamError
+    from foamsilo.foam import edit_dict
+
+    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01,
+                             "material.rheology": "barker-gray"})  # fmt: skip
+    case = create_case(scene, tmp_path / "reg", openfoam).path
+    with edit_dict(case / "constant" / "transportProperties") as tp:
+        coeffs = tp["granular"]["muIRegularisedCoeffs"]
+        for key, value in edit.items():
+            if value is None:
+                del coeffs[key]
+            else:
+                coeffs[key] = value
+    with pytest.raises(FoamError) as err:
+        run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    assert words in err.value.output
 
 
 def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoam, solver):

@@ -15,6 +15,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
+from foamsilo.analytic.rheology import FrictionLaw
 from foamsilo.errors import FoamsiloError
 
 GRAVITY = 9.81
@@ -23,16 +24,27 @@ GRAVITY = 9.81
 # ------------------------------------------------------------------ Bagnold
 
 
-def bagnold_inertial_number(theta: float, mu_s: float, delta_mu: float, i0: float) -> float:
+def bagnold_inertial_number(
+    theta: float, mu_s: float, delta_mu: float, i0: float, *, law: FrictionLaw | None = None
+) -> float:
     """I on a plane inclined at theta [rad]: mu(I) = tan(theta).
+
+    ``law`` replaces the plain law of (mu_s, delta_mu, i0), e.g. by its
+    regularised form (:class:`foamsilo.analytic.rheology.FrictionLaw`).
 
     Raises
     ------
     FoamsiloError
-        Outside mu_s < tan(theta) < mu_s + delta_mu, where no steady uniform
-        flow exists (the layer stops, or accelerates without bound).
+        Outside mu_s < tan(theta) < mu_s + delta_mu (the law's own range for
+        ``law``), where no steady uniform flow exists (the layer stops, or
+        accelerates without bound).
     """
     t = math.tan(theta)
+    if law is not None:
+        try:
+            return law.inertial_number(t)
+        except FoamsiloError as exc:
+            raise FoamsiloError(f"no steady flow at tan(theta) = {t:.4g}: {exc}") from None
     if not mu_s < t < mu_s + delta_mu:
         raise FoamsiloError(
             f"no steady flow: tan(theta) = {t:.4g} must lie in (mu_s, mu_s + delta_mu) = "
@@ -50,13 +62,16 @@ def bagnold_velocity(
     i0: float,
     d: float,
     g: float = GRAVITY,
+    *,
+    law: FrictionLaw | None = None,
 ) -> np.ndarray:
     """Velocity u(z) of the steady mu(I) layer (z from the base, no slip).
 
     With p = rho g cos(theta) (h - z) and I uniform,
     u(z) = (2/3) (I/d) sqrt(g cos theta) [h^(3/2) - (h - z)^(3/2)].
+    ``law``: as for :func:`bagnold_inertial_number`.
     """
-    inertial = bagnold_inertial_number(theta, mu_s, delta_mu, i0)
+    inertial = bagnold_inertial_number(theta, mu_s, delta_mu, i0, law=law)
     zz = np.clip(np.asarray(z, dtype=float), 0.0, depth)
     below = depth - zz
     scale = (2 / 3) * inertial / d * math.sqrt(g * math.cos(theta))

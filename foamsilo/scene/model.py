@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from foamsilo.analytic.rheology import BARKER_GRAY_ALPHA, FrictionLaw
 from foamsilo.scene.schema import field_spec as _f
 
 GRAVITY = 9.81
@@ -175,6 +176,28 @@ class Material:
     mu_s: float = _f("static friction coefficient mu_s", "", ge=0, le=2)
     delta_mu: float = _f("mu_2 - mu_s", "", ge=0, le=2)
     i0: float = _f("inertial-number scale I0", "", gt=0, le=10)
+    rheology: Literal["mu-i", "barker-gray"] = _f(
+        "friction law: mu-i, the plain mu(I), ill-posed below an I1 and above an I2 "
+        "(Barker et al. 2015; I1 = 0.031, I2 = 1.08 for mu_s 0.4, delta_mu 0.28, I0 0.4); "
+        "barker-gray, its partial regularisation (Barker & Gray 2017): "
+        "sqrt(alpha / ln(A / I)) below I1, well posed there",
+        default="mu-i",
+    )
+    mu_inf: float | None = _f(
+        "high-I term mu_inf I^2 / (I0 + I) of the barker-gray law (Barker & Gray 2017; "
+        "it widens the well-posed range at high I); default 0, the plain law above I1",
+        "",
+        ge=0,
+        le=2,
+        default=None,
+    )
+    regularisation_alpha: float | None = _f(
+        "alpha of the barker-gray low-I curve; default 1.9 (Barker & Gray)",
+        "",
+        gt=0,
+        lt=2,
+        default=None,
+    )
     viscosity_cap: float | None = _f(
         "viscosity cap eta_max; give this or viscosity_cap_scaled", "Pa s", gt=0, default=None
     )
@@ -195,6 +218,16 @@ class Material:
         le=2,
         default=None,
     )
+
+    @property
+    def friction_law(self) -> FrictionLaw:
+        """The friction law mu(I) the solver uses, resolved."""
+        if self.rheology == "mu-i":
+            return FrictionLaw(self.mu_s, self.delta_mu, self.i0)
+        alpha = (
+            BARKER_GRAY_ALPHA if self.regularisation_alpha is None else self.regularisation_alpha
+        )
+        return FrictionLaw(self.mu_s, self.delta_mu, self.i0, self.mu_inf or 0.0, alpha)
 
 
 @dataclass(frozen=True)

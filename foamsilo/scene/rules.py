@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 import re
 
-from foamsilo.errors import SceneError
+from foamsilo.errors import FoamsiloError, SceneError
 from foamsilo.scene.model import Scene
 
 #: What a scene name may hold (it names case directories)
@@ -31,6 +31,7 @@ def validate(scene: Scene) -> None:
             "give exactly one of material.viscosity_cap [Pa s] and "
             "material.viscosity_cap_scaled [x rho_p sqrt(g L^3)]",
         )
+    _validate_rheology(scene)
     if m.grain_diameter >= s.orifice_width:
         raise SceneError(
             "material.grain_diameter",
@@ -101,6 +102,21 @@ def validate(scene: Scene) -> None:
             f"got {scene.name!r}; allowed: ASCII letters, digits, '.', '_' and '-', starting "
             "with a letter or digit (the name becomes a directory OpenFOAM and MPI read)",
         )
+
+
+def _validate_rheology(scene: Scene) -> None:
+    m = scene.material
+    if m.rheology == "mu-i":
+        for key in ("mu_inf", "regularisation_alpha"):
+            if getattr(m, key) is not None:
+                raise SceneError(
+                    f"material.{key}", "only for material.rheology = 'barker-gray' (got 'mu-i')"
+                )
+        return
+    try:
+        m.friction_law.i1  # noqa: B018 - raises where there is no well-posed range
+    except FoamsiloError as exc:
+        raise SceneError("material.rheology", str(exc)) from None
 
 
 def _validate_geometry(scene: Scene) -> None:

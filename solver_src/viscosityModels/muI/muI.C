@@ -113,10 +113,15 @@ Foam::viscosityModels::muI::calcNu() const
 
     const volScalarField I(sr*d_/sqrt(pPos/rho_));
 
-    // mu(I) = mus + deltaMu/(I0/I + 1), written without 1/I
-    const volScalarField mu(mus_ + deltaMu_*I/(I0_ + I));
+    return min(friction(I)*pPos/sr, etaMax_)/rho_;
+}
 
-    return min(mu*pPos/sr, etaMax_)/rho_;
+
+Foam::tmp<Foam::volScalarField>
+Foam::viscosityModels::muI::friction(const volScalarField& I) const
+{
+    // mu(I) = mus + deltaMu/(I0/I + 1), written without 1/I
+    return mus_ + deltaMu_*I/(I0_ + I);
 }
 
 
@@ -127,11 +132,12 @@ Foam::viscosityModels::muI::muI
     const word& name,
     const dictionary& viscosityProperties,
     const volVectorField& U,
-    const surfaceScalarField& phi
+    const surfaceScalarField& phi,
+    const word& coeffsName
 )
 :
     viscosityModel(name, viscosityProperties, U, phi),
-    muICoeffs_(viscosityProperties.optionalSubDict(typeName + "Coeffs")),
+    muICoeffs_(viscosityProperties.optionalSubDict(coeffsName)),
     mus_("mus", dimless, Zero),
     deltaMu_("deltaMu", dimless, Zero),
     I0_("I0", dimless, Zero),
@@ -159,6 +165,18 @@ Foam::viscosityModels::muI::muI
 }
 
 
+Foam::viscosityModels::muI::muI
+(
+    const word& name,
+    const dictionary& viscosityProperties,
+    const volVectorField& U,
+    const surfaceScalarField& phi
+)
+:
+    muI(name, viscosityProperties, U, phi, typeName + "Coeffs")
+{}
+
+
 // * * * * * * * * * * * * * * Member Functions  * * * * * * * * * * * * * * //
 
 bool Foam::viscosityModels::muI::read
@@ -168,7 +186,7 @@ bool Foam::viscosityModels::muI::read
 {
     viscosityModel::read(viscosityProperties);
 
-    muICoeffs_ = viscosityProperties.optionalSubDict(typeName + "Coeffs");
+    muICoeffs_ = viscosityProperties.optionalSubDict(type() + "Coeffs");
 
     readCoeffs();
 
