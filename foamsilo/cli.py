@@ -992,11 +992,12 @@ def build_parser() -> argparse.ArgumentParser:
         "verification",
         cmd_bench_verification,
         "code verification of the solver: steady layers down an inclined plane (the mu(I) "
-        "Bagnold profile, the Newtonian film at the cap) and pipe flow on the axisymmetric "
+        "Bagnold profile, plain and regularised, the Newtonian film at the cap) and pipe "
+        "flow on the axisymmetric "
         "wedge, against their exact profiles, with the observed order of accuracy (exit 1 "
         "if a check fails)",
     )
-    sp.add_argument("--quick", action="store_true", help="the coarsest grid only")
+    sp.add_argument("--quick", action="store_true", help="one grid per entry (quick_cells)")
     sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
     sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
     sp.add_argument("--work-dir", help="keep the cases here")
