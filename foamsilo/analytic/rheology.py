@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 from scipy.optimize import brentq
 
@@ -64,7 +65,8 @@ class FrictionLaw:
         nu = i * d / mu
         return 4 * nu * nu - 4 * nu + mu * mu * (1 - nu / 2) ** 2
 
-    @property
+    # computed once per law: mu() and inertial_number() use both in every call
+    @cached_property
     def i1(self) -> float:
         """Lower bound of the plain law's well-posed range.
 
@@ -83,7 +85,7 @@ class FrictionLaw:
             f"mu_inf {self.mu_inf:g}) is ill-posed at every I: nothing to regularise"
         )
 
-    @property
+    @cached_property
     def a(self) -> float:
         """A of the low-I curve (regularised laws only)."""
         if self.alpha is None:
