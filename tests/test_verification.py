@@ -128,3 +128,21 @@ def test_film_above_the_yield_slope_is_refused():
     channel = channel_for(entry, 10)
     with pytest.raises(FoamsiloError, match="below mu_s"):
         exact_velocity("film", channel_scene(entry, channel), channel, np.array([0.01]))
+
+
+def test_the_peak_is_judged_on_check_cells():
+    """The regularised layer's check is at 40 cells in the full run too, not the coarsest."""
+    from dataclasses import replace
+
+    from foamsilo.studies.verify import ChannelResult, check_row, entries
+
+    base = ChannelResult(cells=10, time=45.0, y=[], u=[], u_exact=[], peak_velocity=1.0,
+                         peak_velocity_exact=1.0, peak_error=0.0, mean_error=0.0,
+                         l2_error=0.0, max_error=0.0, unsteadiness=0.0, alpha_min=0.0,
+                         alpha_max=1.0, steps=None, cpu_s=None)  # fmt: skip
+    table = entries()
+    rows = [replace(base, cells=n) for n in table["bagnold-regularised"]["cells"]]
+    assert check_row("bagnold-regularised", table["bagnold-regularised"], rows).cells == 40
+    assert check_row("bagnold", table["bagnold"], rows).cells == 10
+    with pytest.raises(FoamsiloError, match="check_cells = 40: not among"):
+        check_row("bagnold-regularised", table["bagnold-regularised"], rows[:2])

@@ -250,6 +250,24 @@ def observed_orders(rows: list[ChannelResult], key: str) -> list[float | None]:
     return out
 
 
+def check_row(name: str, entry: dict[str, Any], rows: list[ChannelResult]) -> ChannelResult:
+    """Return the row the peak velocity is judged on: ``check_cells``, else the coarsest.
+
+    Raises
+    ------
+    FoamsiloError
+        ``check_cells`` names a grid that was not run.
+    """
+    want = entry.get("check_cells", rows[0].cells)
+    at = next((r for r in rows if r.cells == want), None)
+    if at is None:
+        raise FoamsiloError(
+            f"verification.toml [{name}].check_cells = {want}: not among the grids run "
+            f"({', '.join(str(r.cells) for r in rows)})"
+        )
+    return at
+
+
 def run_entry(
     name: str, entry: dict[str, Any], quick: bool, work: Path, of: OpenFOAM, say: Any
 ) -> dict[str, Any]:
@@ -267,13 +285,7 @@ def run_entry(
         say(f"{name}, {cells} cells: u_p {row.peak_error:+.3%}, L2 {row.l2_error:.2e}, "
             f"steady to {row.unsteadiness:.1e} ({time.perf_counter() - t0:.0f} s)")  # fmt: skip
     tol = entry["tolerance"]
-    # the peak is judged on the entry's check_cells grid (default: the coarsest)
-    at = next((r for r in rows if r.cells == entry.get("check_cells", rows[0].cells)), None)
-    if at is None:
-        raise FoamsiloError(
-            f"verification.toml [{name}].check_cells = {entry['check_cells']}: not among the "
-            f"grids run ({', '.join(str(r.cells) for r in rows)})"
-        )
+    at = check_row(name, entry, rows)
     checks = [
         VerificationCheck(name, f"peak velocity error, {at.cells} cells",
                           at.peak_error, tol["peak_velocity"], tol["peak_velocity_why"]),
