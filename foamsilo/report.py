@@ -178,6 +178,11 @@ def case_report(summary: RunSummary) -> Path:
             f"{_fmt(run.get('steps'))} time steps, {_fmt(run.get('wall_seconds'), '.1f')} s wall, "
             f"{_fmt(run.get('cpu_seconds'), '.1f')} s CPU on {run.get('n_procs', 1)} rank(s).",
             "",
+            f"Scheme: {outer_iterations(scene.outer_correctors)} per step, the granular "
+            f"stress's share of a pressure change {scene.stress_pressure_coupling} in the "
+            f"projection, the {scene.numerics.open_boundary_acceleration}'s acceleration on "
+            "the open boundaries (docs/solver.md).",
+            "",
         ]
         for k, r in enumerate(run.get("recoveries") or [], start=1):
             out.append(

@@ -36,6 +36,11 @@ pytestmark = pytest.mark.openfoam
 PLANAR_16 = ["mesh.cells_across=16", "run.end_time=0.5", "run.write_interval=0.25"]
 
 
+# the scheme in which the lab-silo wedge really diverges at start-up (the
+# recovery tests need a divergence; the default, implicit, runs it)
+LAGGED = "numerics.stress_pressure_coupling='lagged'"
+
+
 def cli(*args: str) -> tuple[int, dict]:
     """Run the command line in-process; return the exit code and its JSON."""
     buf = io.StringIO()
@@ -146,12 +151,12 @@ def test_ctrl_c_stops_the_run_as_an_interruption_to_resume(tmp_path, solver):
 
 
 def test_unstable_scene_is_stopped_with_the_divergence_error(tmp_path, solver):
-    # the 72-across wedge of the lab silo with one PIMPLE pass per step: the
-    # lagged mu(I) viscosity blows up at the orifice edge at t ~ 0.011 s
-    # (docs/geometry.md); three passes (the default) run it
+    # the 72-across wedge of the lab silo with one PIMPLE pass per step and
+    # the stress lagged: the mu(I) viscosity blows up at the orifice edge at
+    # t ~ 0.011 s (docs/geometry.md); three passes run it
     case = tmp_path / "unstable"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["numerics.outer_correctors=1", "run.end_time=0.05",
+                  *sets(["numerics.outer_correctors=1", "run.end_time=0.05", LAGGED,
                          "run.write_interval=0.05", "run.max_recoveries=0"]))  # fmt: skip
     assert code != 0
     err = s["error"]
@@ -252,12 +257,13 @@ def test_a_restart_time_whose_fields_hold_nan_is_set_aside(tmp_path, solver):
 
 
 def test_a_diverged_run_recovers_with_more_iterations_then_goes_back(tmp_path, solver):
-    # the lab-silo wedge at 48 across diverges at start-up at the defaults
-    # (docs/solver.md: the mu(I) Picard iteration not converging); the first
-    # recovery iterates each step 8 times, then puts the scene's 3 back
+    # the lab-silo wedge at 48 across with the stress lagged diverges at
+    # start-up (docs/solver.md: the mu(I) Picard iteration not converging);
+    # the first recovery iterates each step 8 times, then puts the scene's 3 back
     case = tmp_path / "recover"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05"]))  # fmt: skip
+                  *sets(["mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05",
+                         LAGGED]))  # fmt: skip
     assert code == 0, s
     recoveries = s["run"]["recoveries"]
     assert len(recoveries) == 1, recoveries
@@ -351,14 +357,15 @@ def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
 
 
 def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, solver):
-    # the default lab-silo wedge diverges at start-up (t ~ 0.012 s, some
-    # seconds of wall time) and recovers; the limit is the whole run's, so it
-    # stops within the limit of the run's start, not the limit of the restart
+    # the default lab-silo wedge with the stress lagged diverges at start-up
+    # (t ~ 0.012 s, some seconds of wall time) and recovers; the limit is the
+    # whole run's, so it stops within the limit of the run's start, not the
+    # limit of the restart
     from foamsilo.errors import RunTimeLimitError
     from foamsilo.pipeline import CaseSpec, run_case
 
     case, limit = tmp_path / "limit", 20.0
-    spec = CaseSpec(case, "zhou-cyl-bottom", ("run.end_time=0.6",), max_wall_seconds=limit)
+    spec = CaseSpec(case, "zhou-cyl-bottom", ("run.end_time=0.6", LAGGED), max_wall_seconds=limit)
     with pytest.raises(RunTimeLimitError) as info:
         run_case(spec)
     assert info.value.limit == limit and info.value.recoveries >= 1

@@ -131,21 +131,41 @@ def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoa
     assert "pGranular" in err.value.output and "muICoeffs.pName" in err.value.output
 
 
-@pytest.mark.parametrize(("value", "words"), [("faces", "must be face or cell, not faces"),
-                                              (None, "openBoundaryAcceleration")])  # fmt: skip
-def test_the_open_boundary_acceleration_is_required_and_checked(tmp_path, openfoam, solver,
-                                                                value, words):  # fmt: skip
-    """A hand-edited fvSolution with no or a wrong PIMPLE.openBoundaryAcceleration stops."""
+@pytest.mark.parametrize(("key", "value", "words"), [
+    ("openBoundaryAcceleration", "faces", "must be face or cell, not faces"),
+    ("openBoundaryAcceleration", None, "openBoundaryAcceleration"),
+    ("stressPressureCoupling", "explicit", "must be implicit or lagged, not explicit"),
+    ("stressPressureCoupling", None, "stressPressureCoupling"),
+])  # fmt: skip
+def test_the_projection_switches_are_required_and_checked(tmp_path, openfoam, solver,
+                                                         key, value, words):  # fmt: skip
+    """A hand-edited fvSolution with no or a wrong PIMPLE switch of the projection stops."""
     from foamsilo.errors import FoamError
     from foamsilo.foam import edit_dict
 
     scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01})
-    case = create_case(scene, tmp_path / "oba", openfoam).path
+    case = create_case(scene, tmp_path / "switch", openfoam).path
     with edit_dict(case / "system" / "fvSolution") as fv:
         if value is None:
-            del fv["PIMPLE"]["openBoundaryAcceleration"]
+            del fv["PIMPLE"][key]
         else:
-            fv["PIMPLE"]["openBoundaryAcceleration"] = value
+            fv["PIMPLE"][key] = value
     with pytest.raises(FoamError) as err:
         run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
     assert words in err.value.output
+
+
+def test_the_implicit_coupling_needs_the_mu_i_law(tmp_path, openfoam, solver):
+    """d tau/d p comes from the granular law: a Newtonian granular phase cannot give it."""
+    from foamsilo.errors import FoamError
+    from foamsilo.foam import edit_dict
+
+    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01,
+                             "numerics.stress_pressure_coupling": "'implicit'"})  # fmt: skip
+    case = create_case(scene, tmp_path / "newtonian", openfoam).path
+    with edit_dict(case / "constant" / "transportProperties") as tp:
+        tp["granular"]["transportModel"] = "Newtonian"
+        tp["granular"]["nu"] = 0.01
+    with pytest.raises(FoamError) as err:
+        run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    assert "stressPressureCoupling implicit needs a mu(I) law" in err.value.output

@@ -167,8 +167,13 @@ def reduce_case(case: Path) -> Reduction:
         red.warnings.append(
             f"the steady rate swings by {st.step_swing:.1%} from one step to the next (more "
             f"than {STEP_SWING_WARNING:.0%}): a numerical oscillation, and its mean may be off "
-            "by more than that; where the Courant limits were lowered, raise "
-            "numerics.outer_correctors with them (docs/solver.md, 'Q against the time step')"
+            "by more than that"
+            + (
+                "; with the stress lagged, a tall column's pressure swings at small steps: "
+                "numerics.stress_pressure_coupling = 'implicit' (docs/solver.md)"
+                if scene.stress_pressure_coupling == "lagged"
+                else ""
+            )
         )
     if scene.gas_coupled and st.steady:
         red.pore_pressure = pore_pressure(case, scene, d, st)

@@ -419,6 +419,13 @@ class Numerics:
         "of the outflow that grows with the step (docs/solver.md)",
         default="cell",
     )
+    stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
+        "the granular stress's share of a pressure change in the projection: taken "
+        "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
+        "iteration, where a tall column's wall stress feeds the pressure back; default: "
+        "implicit axisymmetric, lagged planar and 3D (why: docs/solver.md)",
+        default=None,
+    )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
         "latest pressure and strain rate; default: 1 planar, 3 axisymmetric and 3D (why: "
@@ -511,6 +518,13 @@ class Scene:
         if self.numerics.cache_gradients is not None:
             return self.numerics.cache_gradients
         return self.representation != "3d"
+
+    @property
+    def stress_pressure_coupling(self) -> str:
+        """``numerics.stress_pressure_coupling`` resolved."""
+        if self.numerics.stress_pressure_coupling is not None:
+            return self.numerics.stress_pressure_coupling
+        return "implicit" if self.representation == "axisymmetric" else "lagged"
 
     @property
     def outer_correctors(self) -> int:

@@ -49,6 +49,7 @@ Description
 #include "fvcSmooth.H"
 #include "fixedGradientFvPatchFields.H"
 #include "extrapolatedCalculatedFvPatchFields.H"
+#include "muI.H"
 
 // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
 

@@ -118,6 +118,36 @@ Foam::viscosityModels::muI::calcNu() const
 
 
 Foam::tmp<Foam::volScalarField>
+Foam::viscosityModels::muI::dEtadp() const
+{
+    const volScalarField& p = U_.db().lookupObject<volScalarField>(pName_);
+    const volScalarField pPos(max(p, pMin_));
+    const volScalarField sr
+    (
+        max
+        (
+            strainRate(),
+            dimensionedScalar("srMin", dimless/dimTime, VSMALL)
+        )
+    );
+    const volScalarField I(sr*d_/sqrt(pPos/rho_));
+    const volScalarField mu(friction(I));
+
+    // I mu'(I) = d mu/d ln I by a central difference: the same for every
+    // law a derived model defines through friction()
+    const scalar eps = 1e-4;
+    const volScalarField dMuDlnI
+    (
+        (friction((1 + eps)*I) - friction((1 - eps)*I))/(2*eps)
+    );
+
+    return
+        pos(etaMax_ - mu*pPos/sr)*pos(p - pMin_)
+       *(mu - 0.5*dMuDlnI)/sr;
+}
+
+
+Foam::tmp<Foam::volScalarField>
 Foam::viscosityModels::muI::friction(const volScalarField& I) const
 {
     // mu(I) = mus + deltaMu/(I0/I + 1), written without 1/I
