@@ -423,7 +423,8 @@ class Numerics:
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
         "iteration, where a tall column's wall stress feeds the pressure back; default: "
-        "implicit axisymmetric, lagged planar and 3D (why: docs/solver.md)",
+        "implicit in axisymmetric scenes and with quasi-2D wall friction, lagged in the "
+        "other planar and 3D ones (why: docs/solver.md)",
         default=None,
     )
     outer_correctors: int | None = _f(
@@ -524,7 +525,8 @@ class Scene:
         """``numerics.stress_pressure_coupling`` resolved."""
         if self.numerics.stress_pressure_coupling is not None:
             return self.numerics.stress_pressure_coupling
-        return "implicit" if self.representation == "axisymmetric" else "lagged"
+        implicit = self.representation == "axisymmetric" or self.wall_friction
+        return "implicit" if implicit else "lagged"
 
     @property
     def outer_correctors(self) -> int:
