@@ -58,20 +58,20 @@ def test_the_thin_silo_s_wall_drag_does_not_saw_tooth(tmp_path, solver):
     The dry thin lab silo (zhou-rect-bottom without its air, W = 3.5 mm,
     32 across, 0.5 s). With the stress lagged its rate swings by 13% from one
     step to the next (spread 31%); with the implicit coupling (the default
-    with wall friction) 0.13% (spread 0.4%); adding the wall drag's own
+    in a dry silo with wall friction) 0.13% (spread 0.4%); adding the wall drag's own
     pressure derivative changes neither (docs/solver.md). Tolerance: the 1%
     above which the report warns of a numerical oscillation (docs/post.md).
     """
-    from foamsilo.scene import load_preset
+    from foamsilo.scene import load_preset, load_scene_file
 
-    preset = load_preset("zhou-rect-bottom")
-    assert preset.stress_pressure_coupling == "implicit"  # the default with wall friction
+    assert load_preset("zhou-rect-bottom").stress_pressure_coupling == "lagged"  # gas-coupled
     text = (
         Path(__file__).parents[1] / "foamsilo" / "presets" / "zhou-rect-bottom.toml"
     ).read_text()
     start, end = text.index("[gas]"), text.index("[mesh]")
     scene = tmp_path / "rect-dry.toml"
     scene.write_text(text[:start] + text[end:])
+    assert load_scene_file(scene).stress_pressure_coupling == "implicit"  # dry, wall friction
     sets = ("run.end_time=0.5", "run.write_interval=0.25")
     (out,) = run_many([CaseSpec(tmp_path / "dry", str(scene), sets)], Budget(cores=1))
     assert out.status == "ok" and out.summary is not None, out.error
