@@ -99,21 +99,34 @@ Foam::viscosityModels::muI::calcNu() const
     }
 
     const volScalarField pPos(max(*pPtr, pMin_));
-
-    // |gammaDot| = sqrt(2)|symm(grad U)|, floored so that eta -> etaMax
-    // (not NaN) where the material is at rest
-    const volScalarField sr
-    (
-        max
-        (
-            strainRate(),
-            dimensionedScalar("srMin", dimless/dimTime, VSMALL)
-        )
-    );
-
-    const volScalarField I(sr*d_/sqrt(pPos/rho_));
+    const volScalarField sr(flooredStrainRate());
+    const volScalarField I(inertialNumber(sr, pPos));
 
     return min(friction(I)*pPos/sr, etaMax_)/rho_;
+}
+
+
+Foam::tmp<Foam::volScalarField>
+Foam::viscosityModels::muI::flooredStrainRate() const
+{
+    // |gammaDot| = sqrt(2)|symm(grad U)|, floored so that eta -> etaMax
+    // (not NaN) where the material is at rest
+    return max
+    (
+        strainRate(),
+        dimensionedScalar("srMin", dimless/dimTime, VSMALL)
+    );
+}
+
+
+Foam::tmp<Foam::volScalarField>
+Foam::viscosityModels::muI::inertialNumber
+(
+    const volScalarField& sr,
+    const volScalarField& pPos
+) const
+{
+    return sr*d_/sqrt(pPos/rho_);
 }
 
 
@@ -122,15 +135,8 @@ Foam::viscosityModels::muI::dEtadp() const
 {
     const volScalarField& p = U_.db().lookupObject<volScalarField>(pName_);
     const volScalarField pPos(max(p, pMin_));
-    const volScalarField sr
-    (
-        max
-        (
-            strainRate(),
-            dimensionedScalar("srMin", dimless/dimTime, VSMALL)
-        )
-    );
-    const volScalarField I(sr*d_/sqrt(pPos/rho_));
+    const volScalarField sr(flooredStrainRate());
+    const volScalarField I(inertialNumber(sr, pPos));
     const volScalarField mu(friction(I));
 
     // I mu'(I) = d mu/d ln I by a central difference: the same for every
