@@ -105,6 +105,43 @@ def test_forchheimer_far_field(tmp_path, openfoam, solver):
     assert slope == pytest.approx(a * w + b * w * w, rel=2e-3)
 
 
+def test_a_column_starts_at_rest_in_the_air_flowing_through_it(tmp_path, openfoam, solver):
+    """At rest under a pore-pressure gradient the grains carry -grad(pf) as well (eq. 13).
+
+    A start from rest gets the granular pressure lithostatic + (pf_s - pf),
+    pf_s the pore pressure at the free surface, so that p + pf is
+    hydrostatic in the grains and the first steps load no unbalanced force
+    (without it the lab silo's start-up diverged; docs/solver.md). One
+    frozen step of the planar silo with air injected: in every cell full of
+    grains p_rgh + pf (p_rgh = p - rho g (z - fill height)) is the one value
+    pf_s, to the convergence of the start-up's Forchheimer iterations (the
+    step's pf is one more; 1e-6 of pf_s allowed), where pf alone spans most
+    of pf_s in the bed (the load the start-up would otherwise take at once).
+    """
+    scene = load_preset(
+        "zhou-planar",
+        ["mesh.cells_across=16", "run.end_time=0.5", "run.write_interval=0.25",
+         'gas.mode="injection"', f"gas.q_air_scaled={Q_SCALED}", "gas.permeability_scaled=1"],
+    )  # fmt: skip
+    case = create_case(scene, tmp_path / "start", openfoam).path
+    frozen_flow_step(case, 1e-7)
+    with edit_dict(case / "system" / "fvSolution") as fs:
+        fs["solvers"]["pf"].update(tolerance=1e-12, relTol=0)
+    run_utility(openfoam, case, str(solver.executable), log_name="siloFoam")
+    assert (
+        "Start-up: granular pressure with the pore pressure's support"
+        in (case / "log.siloFoam").read_text()
+    )
+    out = case / time_directories(case)[-1]
+    alpha = read_internal_field(out / "alpha.granular")
+    grains = alpha > 1 - 1e-9
+    pf = read_internal_field(out / "pf")[grains]
+    total = read_internal_field(out / "p_rgh")[grains] + pf
+    pf_s = total.max()
+    assert np.ptp(pf) > 0.5 * pf_s  # the bed's drop is most of the pore pressure
+    assert np.ptp(total) < 1e-6 * pf_s
+
+
 COUPLED_SWEEP = """
 base = "zhou-planar"
 name = "coupled"

@@ -148,3 +148,47 @@ def test_time_step_rows_are_judged_against_the_default_step():
     assert not by_name["step-bound, Courant 0.25: Q against Courant 0.5"].passed
     assert not by_name["stopped, Courant 0.25: Q against Courant 0.5"].passed  # no Q: fails
     assert len(by_name) == 3  # the reference rows are not checked against themselves
+
+
+def test_a_rate_swinging_from_step_to_step_is_no_steady_outcome(tmp_path):
+    from foamsilo.pipeline import CaseSpec, Outcome
+    from foamsilo.studies.cases import _outcome_words
+
+    spec = CaseSpec(tmp_path, "zhou-planar")
+
+    def words(swing):
+        return _outcome_words(Outcome(spec, "ok", {"steady": True, "Q_step_swing": swing}))
+
+    assert words(0.004) == ("steady", "")
+    word, detail = words(0.22)  # the lagged gas-assisted lab silo's swing
+    assert word == "oscillating" and "22.0%" in detail
+    assert _outcome_words(Outcome(spec, "ok", {"steady": False, "steady_reason": "drift"}))[0] == (
+        "not steady"
+    )
+
+
+def test_gas_rows_are_judged_on_eq17_with_their_own_zone_gradient():
+    from foamsilo.studies.suite import derive_gas_lab
+
+    def row(q_air, q, zone=None, outcome="steady", swing=0.0):
+        return {"label": f"{q_air}", "grain_diameter": 538e-6, "q_air_lpm": q_air, "Q": q,
+                "outcome": outcome, "zone_gradient_scaled": zone, "Q_step_swing": swing}  # fmt: skip
+
+    rows = [
+        row(None, 0.0275),
+        row(12.0, 0.0275 * 3.0 * 1.05, zone=8.0),  # eq. 17: sqrt(9) = 3; 5% above it
+        row(25.0, 0.0275 * 2.0, zone=8.0),  # a third below eq. 17
+        row(4.0, 0.04, zone=1.2, outcome="oscillating", swing=0.2),
+    ]
+    data = {"rows": rows}
+    derive_gas_lab(data)
+    assert rows[1]["eq17_ratio"] == pytest.approx(3.0, rel=1e-12)
+    assert rows[1]["eq17_rel_error"] == pytest.approx(0.05, rel=1e-9)
+    assert rows[1]["eq23_ratio"] > 1  # the Table I law, computed
+    assert rows[3]["sim_ratio"] is None  # no Q/Q0 from an oscillating rate
+    by_name = {c.name: c for c in checks({"gas-lab": data})}
+    assert by_name["12.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
+    assert not by_name["25.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
+    assert not by_name["4.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
+    assert by_name["None: steady at its defaults"].passed
+    assert not by_name["4.0: steady at its defaults"].passed

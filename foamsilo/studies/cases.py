@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from foamsilo.pipeline import Budget, CaseSpec, Outcome, run_many
+from foamsilo.post.steady import STEP_SWING_WARNING
 from foamsilo.run import STEP_TABLE
 from foamsilo.scene import format_override, load_preset, read_toml
 
@@ -64,8 +65,17 @@ class StudyCase:
 
 def _outcome_words(o: Outcome) -> tuple[str, str]:
     if o.ok and o.summary is not None:
-        steady = bool(o.summary.get("steady"))
-        return ("steady" if steady else "not steady"), o.summary.get("steady_reason") or ""
+        if not o.summary.get("steady"):
+            return "not steady", o.summary.get("steady_reason") or ""
+        # a rate that swings from step to step is a numerical oscillation, not a
+        # steady discharge: its mean is no result (docs/post.md)
+        swing = o.summary.get("Q_step_swing")
+        if swing is not None and swing > STEP_SWING_WARNING:
+            return "oscillating", (
+                f"the rate swings by {swing:.1%} from one step to the next "
+                f"(more than {STEP_SWING_WARNING:.0%})"
+            )
+        return "steady", ""
     err = o.error or {}
     kind = {
         "DivergenceError": "stopped: diverged",

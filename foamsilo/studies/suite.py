@@ -12,6 +12,9 @@ the same entries and fails when a checked figure leaves its tolerance.
 
 Entries
 -------
+``presets``
+    Every preset (each seed scene of the papers) at its own defaults: each
+    must reach a steady discharge.
 ``work-precision``
     The planar silo of Zhou sec. III.B and the axisymmetric lab silo (Zhou
     Table I) at several resolutions: steady Q against the finest and against
@@ -20,7 +23,8 @@ Entries
     Venier Test 1 (outlets 3 to 12 cm, axisymmetric): the fit W = C (d - f)^2.5
     with C, f and R^2; and the planar silo against the orifice width, 2D Beverloo.
 ``gas-lab``
-    The lab silo with air injected at the top against eq. 23, on Q/Q0.
+    The lab silo with air injected at the top, on Q/Q0: against eq. 17 with
+    the run's own pore-pressure gradient (checked) and eq. 23 (reported).
 ``extremes``
     Stiff and extreme scenes at their defaults, each of which must reach a
     steady discharge (with the runner's recoveries where it diverges).
@@ -231,36 +235,31 @@ def beverloo(
 
 
 # ---------------------------------------------------------- gas-assisted lab
-def _late_mean(case: Path, skip: float) -> tuple[float | None, float | None]:
-    """Time-weighted mean and std of the orifice rate after ``skip`` seconds (discharge.csv)."""
-    table = case / "discharge.csv"
-    if not table.exists():
-        return None, None
-    data = np.loadtxt(table, delimiter=",", skiprows=1, ndmin=2)
-    t, q = data[:, 0], data[:, 2]
-    dt = np.diff(np.concatenate([[0.0], t]))
-    keep = t > skip
-    if keep.sum() < 20 or t[-1] < 2 * skip:
-        return None, None
-    w = dt[keep]
-    mean = float(np.sum(q[keep] * w) / np.sum(w))
-    return mean, float(np.sqrt(np.sum((q[keep] - mean) ** 2 * w) / np.sum(w)))
+def _zone_gradient(case: Path) -> float | None:
+    """Mean dp_f/dz over the zone of radius D/2 above the orifice, over rho g (summary.json)."""
+    summary = case / "summary.json"
+    if not summary.exists():
+        return None
+    pp = json.loads(summary.read_text()).get("pore_pressure") or {}
+    value = pp.get("zone_gradient_scaled")
+    return float(value) if value is not None and math.isfinite(value) else None
 
 
 def gas_lab(
     quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
-    """Zhou's cylindrical lab silo with air injected at the top, against eq. 23.
+    """Zhou's cylindrical lab silo with air injected at the top, against eqs. 17 and 23.
 
     Each grain size also runs with the open top, and the comparison is made
     on Q/Q0 (the rate over the open-top rate, Zhou's Fig. 7 axes): the
     continuum's own Q0 is above eq. 1 (see work-precision), and the ratio
     isolates the gas. eq. 23 with the Table I constants (phi_o from eq. 2 with
-    xi_phi = 0.83, Ergun permeabilities at phi_o, Forchheimer term on, A = 1).
+    xi_phi = 0.83, Ergun permeabilities at phi_o, Forchheimer term on, A = 1)
+    is the experiments' law; eq. 17, Q/Q0 = sqrt(1 + <dp_f/dz>/(rho g)) with
+    the simulation's own mean pore-pressure gradient over the zone of radius
+    D/2 above the orifice (Zhou's Fig. 6b), is the model's mechanism, which a
+    run must obey.
     """
-    from foamsilo.analytic.zhou import gas_assisted
-    from foamsilo.scene import load_preset
-
     entry = study_table("suite")["gas-lab"]
     preset = entry["preset"]
     base = overrides(pick(entry, "set", quick))
@@ -279,19 +278,41 @@ def gas_lab(
             cases.append(StudyCase(label, preset, [*base, size, *mode]))
             keys.append((d, q))
     rows = run_rows(cases, work / "gas-lab", jobs, limit, on_row)
-    skip = entry["skip_time_scales"] * load_preset(preset).time_scale
-    for r in rows:
-        r["Q_mean"], r["Q_mean_std"] = _late_mean(Path(r["case_dir"]), skip=skip)
-    q_open = {d: r.get("Q_mean") for r, (d, q) in zip(rows, keys, strict=True) if q is None}
     for r, (d, q) in zip(rows, keys, strict=True):
         r["grain_diameter"], r["q_air_lpm"] = d, q
+        r["zone_gradient_scaled"] = _zone_gradient(Path(r["case_dir"])) if q is not None else None
+    data = {"rows": rows}
+    derive_gas_lab(data)
+    return data
+
+
+def derive_gas_lab(data: dict[str, Any]) -> None:
+    """Add Q/Q0 and its laws to the gas rows (``sim_ratio``, ``eq17_ratio``, ``eq23_ratio``).
+
+    Q/Q0 only from steady rates: an open-top rate or a gas rate that is not
+    steady gives none.
+    """
+    from foamsilo.analytic.zhou import gas_assisted
+
+    rows = data["rows"]
+
+    def steady_q(r: Row) -> float | None:
+        return r.get("Q") if r["outcome"] == "steady" else None
+
+    q_open = {r["grain_diameter"]: steady_q(r) for r in rows if r["q_air_lpm"] is None}
+    for r in rows:
+        d, q = r["grain_diameter"], r["q_air_lpm"]
         if q is None:
             continue
-        theory = gas_assisted("cyl-bottom", d, q * 1e-3 / 60)
-        r["eq23_ratio"] = theory.Q_reduced
-        r["sim_ratio"] = r["Q_mean"] / q_open[d] if r.get("Q_mean") and q_open.get(d) else None
-        r["rel_error"] = r["sim_ratio"] / theory.Q_reduced - 1 if r["sim_ratio"] else None
-    return {"rows": rows, "skip_time_scales": entry["skip_time_scales"]}
+        r["eq23_ratio"] = gas_assisted("cyl-bottom", d, q * 1e-3 / 60).Q_reduced
+        q_sim, q0 = steady_q(r), q_open.get(d)
+        r["sim_ratio"] = q_sim / q0 if q_sim and q0 else None
+        r["rel_error"] = r["sim_ratio"] / r["eq23_ratio"] - 1 if r["sim_ratio"] else None
+        zone = r.get("zone_gradient_scaled")
+        r["eq17_ratio"] = math.sqrt(1 + zone) if zone is not None and zone > -1 else None
+        r["eq17_rel_error"] = (
+            r["sim_ratio"] / r["eq17_ratio"] - 1 if r["sim_ratio"] and r["eq17_ratio"] else None
+        )
 
 
 # ------------------------------------------------------------------ extremes
@@ -382,8 +403,28 @@ def derive_time_step(data: dict[str, Any]) -> None:
             r["spread"] = r["Q_std"] / r["Q"] if r.get("Q") and r.get("Q_std") else None
 
 
+# ------------------------------------------------------------------- presets
+def presets(
+    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+) -> dict[str, Any]:
+    """Every preset (each seed scene of the papers) at its own defaults, to its end time."""
+    from foamsilo.scene import load_preset, preset_names
+
+    entry = study_table("suite")["presets"]
+    names = entry["quick"] if quick else preset_names()
+    cases = [StudyCase(n, n, []) for n in names]
+    rows = run_rows(cases, work / "presets", jobs, limit, on_row)
+    for r in rows:
+        scene = load_preset(r["preset"])
+        r["representation"] = scene.representation
+        r["scheme"] = scene.stress_pressure_coupling
+        r["flow_rate_scale"] = scene.flow_rate_scale[0]
+    return {"rows": rows}
+
+
 # --------------------------------------------------------------------- suite
 ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
+    "presets": presets,
     "work-precision": work_precision,
     "beverloo": beverloo,
     "gas-lab": gas_lab,
@@ -443,11 +484,17 @@ def checks(result: dict[str, Any]) -> list[Check]:
     gl = result.get("gas-lab")
     if gl:
         for r in gl["rows"]:
-            if r["q_air_lpm"] == 12.0 and r["grain_diameter"] == 538e-6:
-                value = r["sim_ratio"] / r["eq23_ratio"] if r.get("sim_ratio") else None
-                out.append(
-                    check("gas-lab-538-12", "d = 538 um, 12 L/min: Q/Q0 over eq. 23's", value)
-                )
+            steady = 1.0 if r["outcome"] == "steady" else 0.0
+            out.append(check("gas-lab-steady", f"{r['label']}: steady at its defaults", steady))
+            if r["q_air_lpm"] is not None:
+                out.append(check("gas-lab-eq17", f"{r['label']}: Q/Q0 over eq. 17's with "
+                                 "the zone's gradient - 1", r.get("eq17_rel_error")))  # fmt: skip
+    pre = result.get("presets")
+    if pre:
+        for r in pre["rows"]:
+            steady = 1.0 if r["outcome"] == "steady" else 0.0
+            out.append(check("presets-steady", f"preset {r['label']}: steady at its defaults",
+                             steady))  # fmt: skip
     ext = result.get("extremes")
     if ext:
         for r in ext["rows"]:
@@ -549,6 +596,8 @@ def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
         derive_work_precision(data)
     if result.get("time-step"):
         derive_time_step(result["time-step"])
+    if result.get("gas-lab"):
+        derive_gas_lab(result["gas-lab"])
     return write_report(result, out_dir, stem)
 
 
@@ -682,6 +731,31 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         + ".",
         "",
     ]
+    pre = result.get("presets")
+    if pre:
+        lines += [
+            "## The presets at their defaults",
+            "",
+            "Each seed scene as `foamsilo run PRESET` runs it: its own mesh, end time and "
+            "numerics. Swing: the step-to-step part of the rate's spread (above 1%: a "
+            "numerical oscillation, no steady rate).",
+            "",
+            "| preset | representation | stress coupling | cells | outcome | Q | Q* (scale) "
+            "| spread | swing | recoveries | steps | CPU [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for r in pre["rows"]:
+            q = r.get("Q")
+            lines.append(
+                f"| {r['label']} | {r['representation']} | {r['scheme']} "
+                f"| {fmt(r.get('cells'), 'd')} | {r['outcome']} | {fmt(q, '.5g')} "
+                f"| {fmt(r.get('Q_dimensionless'), '.4f')} ({r['flow_rate_scale']}) "
+                f"| {fmt(r['Q_std'] / q if q and r.get('Q_std') is not None else None, '.2%')} "
+                f"| {fmt(r.get('Q_step_swing'), '.2%')} | {fmt(r.get('recoveries'), 'd')} "
+                f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('cpu_s'), '.0f')} |"
+            )
+        lines += [""] + [f"* **{r['label']}**: {r['detail']}" for r in pre["rows"]
+                         if r.get("detail")] + [""]  # fmt: skip
     wp = result.get("work-precision")
     if wp:
         lines += [
@@ -763,29 +837,29 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
     gl = result.get("gas-lab")
     if gl:
         lines += [
-            "## Gas-assisted lab silo against eq. 23",
+            "## Gas-assisted lab silo against eqs. 17 and 23",
             "",
-            "Zhou Table I cylinder, axisymmetric. Q: the time mean of the orifice rate after "
-            f"{gl.get('skip_time_scales', 1.5):g} sqrt(L/g), with its standard deviation (a "
-            "gas-driven rate is judged by its mean, not by the steady criterion); Q/Q0 "
-            "against the same grains with the open top, compared with eq. 23 (Table I "
-            "constants, A = 1).",
+            "Zhou Table I cylinder, axisymmetric. Q: the steady rate with its standard "
+            "deviation; Q/Q0 against the same grains with the open top. Eq. 17: "
+            "sqrt(1 + G), G the run's mean dp_f/dz over the zone of radius D/2 above the "
+            "orifice over rho g (the model's mechanism, Zhou Fig. 6b); eq. 23: the "
+            "experiments' law (Table I constants, A = 1).",
             "",
-            "| case | Q [kg/s] | Q/Q0 simulated | Q/Q0 eq. 23 | difference | wall [s] |",
-            "| --- | --- | --- | --- | --- | --- |",
+            "| case | outcome | Q [kg/s] | swing | Q/Q0 simulated | G | Q/Q0 eq. 17 | difference "
+            "| Q/Q0 eq. 23 | difference | recoveries | wall [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
         for r in gl["rows"]:
-            q = f"{fmt(r.get('Q_mean'), '.4g')} ± {fmt(r.get('Q_mean_std'), '.2g')}"
+            q = f"{fmt(r.get('Q'), '.4g')} ± {fmt(r.get('Q_std'), '.2g')}"
             lines.append(
-                f"| {r['label']} | {q} | {fmt(r.get('sim_ratio'), '.3f')} "
+                f"| {r['label']} | {r['outcome']} | {q} | {fmt(r.get('Q_step_swing'), '.2%')} "
+                f"| {fmt(r.get('sim_ratio'), '.3f')} | {fmt(r.get('zone_gradient_scaled'), '.3g')} "
+                f"| {fmt(r.get('eq17_ratio'), '.3f')} | {fmt(r.get('eq17_rel_error'), '+.1%')} "
                 f"| {fmt(r.get('eq23_ratio'), '.3f')} | {fmt(r.get('rel_error'), '+.1%')} "
-                f"| {fmt(r.get('wall_s'), '.0f')} |"
+                f"| {fmt(r.get('recoveries'), 'd')} | {fmt(r.get('wall_s'), '.0f')} |"
             )
-        notes = [
-            f"* **{r['label']}**: {r['outcome']}: {r['detail']}"
-            for r in gl["rows"]
-            if r.get("detail") and r.get("Q_mean") is None
-        ]
+        notes = [f"* **{r['label']}**: {r['outcome']}: {r['detail']}" for r in gl["rows"]
+                 if r.get("detail")]  # fmt: skip
         lines += ["", *notes, ""]
     cap = result.get("cap")
     if cap:

@@ -27,7 +27,8 @@ Description
       carries spurious fast velocities (granularCourantNo.H, setDeltaT.H).
     - Optional gas coupling (Zhou et al. 2019): a Darcy-Forchheimer pore
       pressure pf with the top condition of their eq. 16, whose gradient
-      acts on the grains (createPorePressure.H, pfEqn.H), and optional
+      acts on the grains (createPorePressure.H, pfEqn.H; a start from rest
+      carries the pore pressure's support, poreSupport.H), and optional
       quasi-2D wall friction (their eq. 14); a dry silo has neither.
     - A static mesh; no MRF, no LTS.
 
@@ -48,6 +49,7 @@ Description
 #include "fvOptions.H"
 #include "fvcSmooth.H"
 #include "fixedGradientFvPatchFields.H"
+#include "fixedFluxPressureFvPatchScalarField.H"
 #include "extrapolatedCalculatedFvPatchFields.H"
 #include "muI.H"
 
@@ -74,6 +76,7 @@ int main(int argc, char *argv[])
     #include "createAlphaFluxes.H"
     #include "createPorePressure.H"
     #include "faceReconstruction.H"
+    #include "poreSupport.H"
 
     turbulence->validate();
 
