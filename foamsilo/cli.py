@@ -327,6 +327,13 @@ def _print_summary(s: dict[str, Any]) -> None:
             f"{s['Q_dimensionless']:.4f} +- {s['Q_std_dimensionless']:.4f}",
         )
         t.add_row(f"Q/({scale}), volume decrease", f"{s['Q_from_volume_dimensionless']:.4f}")
+        u = s.get("Q_uncertainty") or {}
+        if u.get("grid_known"):
+            t.add_row("uncertainty (95%), time and grid",
+                      f"+- {u['combined']:.2g} {s['Q_units']} ({u['relative']:.1%})")  # fmt: skip
+        elif u:
+            t.add_row("uncertainty (95%), time only",
+                      f"+- {u['time']:.2g} {s['Q_units']} (grid: --grid-error)")  # fmt: skip
         w = s["steady_window_s"]
         t.add_row("steady window", f"{w[0]:.3g} - {w[1]:.3g} s")
         ref = s.get("reference")
@@ -360,7 +367,7 @@ def _print_summary(s: dict[str, Any]) -> None:
 def cmd_run(args: argparse.Namespace) -> int:
     """Create (if needed), run and reduce a case."""
     from foamsilo.case import is_case
-    from foamsilo.pipeline import CaseSpec, run_case
+    from foamsilo.pipeline import CaseSpec, grid_study, run_case
     from foamsilo.scene import load_scene
 
     if args.np is not None and args.np < 1:
@@ -399,7 +406,10 @@ def cmd_run(args: argparse.Namespace) -> int:
         reconstruct=args.reconstruct,
     )
     with _progress(args) as progress:
-        summary = run_case(spec, progress=progress, say=_say(args))
+        if args.grid_error:
+            summary = grid_study(spec, progress=progress, say=_say(args))
+        else:
+            summary = run_case(spec, progress=progress, say=_say(args))
     s = summary.as_json()
     _emit(args, {"ok": True, **s}, lambda: _print_summary(s))
     return 0
@@ -891,6 +901,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sp.add_argument(
         "--np", type=int, default=None, help="MPI ranks (default: the scene's run.n_procs)"
+    )
+    sp.add_argument(
+        "--grid-error",
+        action="store_true",
+        help="also run the scene on two coarser grids (cells across / 1.5 and / 2.25, in "
+        "<case>.grid/) and give Q's uncertainty with its grid error (GCI)",
     )
     sp.add_argument(
         "--hostfile",

@@ -59,6 +59,7 @@ from foamsilo.errors import (
 from foamsilo.foam import reconstruct_par
 from foamsilo.jsonio import dumps, jsonable
 from foamsilo.post import reduce_case
+from foamsilo.post.grid import GRID_RATIO, coarser_cells, write_grid_file
 from foamsilo.post.steady import START
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
@@ -715,6 +716,91 @@ def run_many(
     return [results[i] for i in range(len(specs))]
 
 
+# ----------------------------------------------------------------------------- grid study
+
+
+def grid_study(
+    spec: CaseSpec,
+    *,
+    budget: Budget | None = None,
+    ratio: float = GRID_RATIO,
+    of: OpenFOAM | None = None,
+    progress: ProgressCallback | None = None,
+    say: Say = _quiet,
+) -> RunSummary:
+    """Run a case and its scene on two coarser grids; its summary gets the grid error.
+
+    The companions (cells across divided by ``ratio`` and ``ratio**2``) are
+    cases of their own in ``<case>.grid/<N>-across`` (kept; found finished,
+    they are only reduced again). They run beside the case, under what the
+    budget leaves it; their steady rates go into the case's ``grid.json``
+    and the case is reduced again, so that ``summary.json`` carries the grid
+    convergence and ``Q_uncertainty`` combines it with the time-averaging
+    error (:mod:`foamsilo.post.grid`). A companion that fails leaves the
+    grid error unknown (said in the summary), not the case unreduced.
+
+    Raises
+    ------
+    FoamsiloError
+        The grids cannot be coarsened (too few cells across); the case's own
+        errors as :func:`run_case` raises them.
+    """
+    import threading
+
+    budget = budget or Budget()
+    case_dir = Path(spec.case_dir).resolve()
+    if spec.scene is None:
+        source = str(case_dir / SCENE_FILE)
+        scene = load_scene_file(source, list(spec.overrides))
+    else:
+        source = spec.scene
+        scene = load_scene(spec.scene, list(spec.overrides))
+    cells = coarser_cells(scene.cells_across, ratio)
+    home = case_dir.parent / f"{case_dir.name}.grid"
+    companions = [
+        CaseSpec(
+            home / f"{n}-across",
+            source,
+            (*spec.overrides, f"mesh.cells_across={n}"),
+            n_procs=spec.n_procs,
+            rerun=spec.rerun,
+            overwrite=spec.overwrite,
+            update=not spec.overwrite,
+            max_wall_seconds=spec.max_wall_seconds,
+            label=f"{n} across",
+        )
+        for n in cells
+    ]
+    ranks = spec.n_procs or scene.run.n_procs
+    side = Budget(cores=max(ranks, budget.cores - ranks), ranks_per_case=ranks)
+
+    def done(o: Outcome) -> None:
+        q = (o.summary or {}).get("Q")
+        say(f"grid study: {o.spec.label}: " + (f"steady Q = {q:.5g}" if q else o.status))
+
+    found: list[Outcome] = []
+    failure: list[BaseException] = []
+
+    def companions_run() -> None:
+        try:
+            found.extend(run_many(companions, side, on_done=done))
+        except BaseException as exc:  # reported with the study, not lost in the thread
+            failure.append(exc)
+
+    # daemon: a case stopped by Ctrl-C or an error ends the process, and its
+    # workers (tied to it) with it
+    worker = threading.Thread(target=companions_run, daemon=True)
+    worker.start()
+    run_case(spec, of=of, progress=progress, say=say)
+    worker.join()
+    if failure:
+        raise failure[0]
+    values = [(o.summary or {}).get("Q") if o.ok else None for o in found]
+    write_grid_file(case_dir, [*cells, scene.cells_across], [*values, None],
+                    [c.case_dir for c in companions])  # fmt: skip
+    return reduce(case_dir)
+
+
 if __name__ == "__main__":  # pragma: no cover - the worker entry point
     sys.exit(_worker_main())
 
@@ -725,6 +811,7 @@ __all__ = [
     "Outcome",
     "RunSummary",
     "error_payload",
+    "grid_study",
     "prepare",
     "reduce",
     "run",

@@ -48,12 +48,17 @@ def plot_discharge(summary: RunSummary, path: Path) -> Path:
     if st.steady:
         ax.axvspan(st.t_start / T, st.t_end / T, color="C0", alpha=0.08, label="steady window")
         ax.axhline(st.q / scale, color="C0", ls="--", lw=1, label=f"steady Q = {st.q / scale:.4f}")
+        span = [st.t_start / T, st.t_end / T]
+        u = red.uncertainty or {}
+        if u.get("grid_known") and math.isfinite(u["combined"]):  # 95%: time and grid
+            lo, hi = (st.q - u["combined"]) / scale, (st.q + u["combined"]) / scale
+            band = f"95% band, time averaging and grid (± {u['relative']:.1%})"
+            ax.fill_between(span, lo, hi, facecolor="none", edgecolor="C4", hatch="///",
+                            lw=1.0, label=band)  # fmt: skip
         if math.isfinite(st.q_error):  # the error of the time average, 2 standard errors
             lo, hi = (st.q - 2 * st.q_error) / scale, (st.q + 2 * st.q_error) / scale
             band = f"± 2 standard errors of the mean ({2 * st.q_error / st.q:.2%})"
-            ax.fill_between(
-                [st.t_start / T, st.t_end / T], lo, hi, color="C0", alpha=0.25, label=band
-            )
+            ax.fill_between(span, lo, hi, color="C0", alpha=0.25, label=band)
     for k, ref in enumerate(summary.references):
         colour = f"C{k + 1}"
         if ref.spread > 0:
@@ -72,6 +77,30 @@ def plot_discharge(summary: RunSummary, path: Path) -> Path:
     top = max([float(np.max(d.mass_flow / scale))] + [r.q / scale for r in summary.references])
     ax.set_ylim(0, 1.2 * top)
     return finish(fig, ax, path)
+
+
+def _uncertainty_line(s: dict[str, Any], units: str) -> str:
+    """Return the rate's 95% band in words: time averaging, and the grid where studied."""
+    u = s.get("Q_uncertainty") or {}
+    grid = s.get("grid")
+    if u.get("grid_known") and grid:
+        c = grid["convergence"]
+        cells = " / ".join(str(n) for n in grid["cells"])
+        values = " / ".join(f"{v:.5g}" for v in grid["values"])
+        order = f"observed order {c['order']:.2f}, " if c.get("order") is not None else ""
+        ext = (f"extrapolated {c['extrapolated']:.5g} {units}, "
+               if c.get("extrapolated") is not None else "")  # fmt: skip
+        return (
+            f"* uncertainty (95%): **± {u['combined']:.2g} {units} ({u['relative']:.1%})**: "
+            f"time averaging ± {u['time']:.2g} (2 standard errors), grid ± {u['grid']:.2g} "
+            f"(GCI of {cells} cells across: Q = {values}, {c['kind']}, {order}{ext}"
+            "Celik et al. 2008);"
+        )
+    why = grid["reason"] if grid else "no grid study (`foamsilo run ... --grid-error`)"
+    return (
+        f"* uncertainty (95%): time averaging ± {_fmt(u.get('time'), '.2g')} {units}; "
+        f"the grid error is not known: {why};"
+    )
 
 
 def case_report(summary: RunSummary) -> Path:
@@ -113,6 +142,7 @@ def case_report(summary: RunSummary) -> Path:
             f"({s['flux_vs_volume_rel_diff']:.2%} from the orifice flux);",
             f"* drift over the window {s['drift']:+.1%}, largest excursion {s['excursion']:.1%};",
         ]
+        out.append(_uncertainty_line(s, units))
         ref = s.get("reference")
         if ref and ref.get("rel_diff") is not None:
             out.append(f"* against {ref['source']}: {ref['rel_diff']:+.1%};")

@@ -20,6 +20,7 @@ from foamsilo.case import SCENE_FILE, read_metadata, time_directories
 from foamsilo.errors import FoamsiloError
 from foamsilo.post.discharge import DISCHARGE_CSV, Discharge, read_discharge, write_discharge_csv
 from foamsilo.post.fields import FieldSummary, field_summary
+from foamsilo.post.grid import GridError, combined_uncertainty, read_grid_error
 from foamsilo.post.pore_pressure import (
     PORE_PRESSURE_PNG,
     PorePressure,
@@ -51,6 +52,9 @@ class Reduction:
         The pore-pressure reduction (gas-coupled scenes with a steady regime).
     fields
         The field reduction, or None with ``fields_error`` saying why.
+    grid
+        The rate on two coarser grids and the grid error it gives (after a
+        grid study, :mod:`foamsilo.post.grid`), or None.
     warnings
         What makes the numbers less than whole (output shorter than the run,
         rows dropped); shown in the summary and the report.
@@ -64,7 +68,16 @@ class Reduction:
     pore_pressure: PorePressure | None = None
     fields: FieldSummary | None = None
     fields_error: str | None = None
+    grid: GridError | None = None
     warnings: list[str] = field(default_factory=list)
+
+    @property
+    def uncertainty(self) -> dict[str, Any] | None:
+        """The steady rate's 95% band (time averaging, and the grid where studied), or None."""
+        st = self.steady
+        if not st.steady:
+            return None
+        return combined_uncertainty(st.q, st.q_error, self.grid)
 
     @property
     def flow_rate_scale(self) -> tuple[str, float]:
@@ -99,8 +112,8 @@ class Reduction:
             ],
             "Q": finite(st.q),
             "Q_std": finite(st.q_std),
-            # the error of the time average (batch means); a grid error, where a
-            # convergence study gives one, is added in quadrature by the study
+            # the error of the time average (batch means); the grid error, after a
+            # grid study, is combined with it in Q_uncertainty
             "Q_time_error": finite(st.q_error),
             "Q_time_error_batch_span": finite(st.batch_span),
             "Q_from_volume": finite(st.q_from_volume),
@@ -121,6 +134,12 @@ class Reduction:
             "flow_rate_scale": {"name": name, "value": scale},
             "warnings": list(self.warnings),
         }
+        band = self.uncertainty
+        if band is not None:
+            out["Q_uncertainty"] = {k: finite(v) if isinstance(v, float) else v
+                                    for k, v in band.items()}  # fmt: skip
+        if self.grid is not None:
+            out["grid"] = self.grid.as_dict()
         if self.pore_pressure is not None:
             out["pore_pressure"] = pore_pressure_scaled(self.pore_pressure, sc, st)
         out["fields"] = self.fields.as_dict() if self.fields else {"error": self.fields_error}
@@ -163,6 +182,7 @@ def reduce_case(case: Path) -> Reduction:
     d = read_discharge(case, scene)
     st = find_steady(d, scene)
     red = Reduction(case, scene, meta.get("cells"), d, st, warnings=_coverage_warnings(case, d))
+    red.grid = read_grid_error(case, st.q if st.steady else None)
     if st.steady and st.step_swing > STEP_SWING_WARNING:
         red.warnings.append(
             f"the steady rate swings by {st.step_swing:.1%} from one step to the next (more "
