@@ -59,7 +59,7 @@ from foamsilo.errors import (
 from foamsilo.foam import reconstruct_par
 from foamsilo.jsonio import dumps, jsonable
 from foamsilo.post import reduce_case
-from foamsilo.post.grid import GRID_RATIO, coarser_cells, write_grid_file
+from foamsilo.post.grid import GRID_RATIO, coarser_cells, companion_overrides, write_grid_file
 from foamsilo.post.steady import START
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
@@ -761,7 +761,7 @@ def grid_study(
         CaseSpec(
             home / f"{n}-across",
             source,
-            (*spec.overrides, f"mesh.cells_across={n}"),
+            (*spec.overrides, *companion_overrides(scene, n)),
             n_procs=spec.n_procs,
             rerun=spec.rerun,
             overwrite=spec.overwrite,

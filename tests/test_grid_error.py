@@ -101,3 +101,18 @@ def test_a_grid_study_s_band_holds_the_converged_planar_rate(tmp_path, solver):
     assert u["relative"] < 0.15
     report = (tmp_path / "p36" / "report.md").read_text()
     assert "GCI of 16 / 24 / 36 cells across" in report
+
+
+def test_a_graded_mesh_is_coarsened_as_a_whole():
+    from foamsilo.post.grid import companion_overrides
+    from foamsilo.scene import load_preset
+
+    uniform = load_preset("zhou-cyl-bottom")
+    assert companion_overrides(uniform, 48) == ["mesh.cells_across=48"]
+    graded = load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.cells_across=72"])
+    sets = companion_overrides(graded, 32)
+    assert sets[:2] == ["mesh.cells_across=32", "mesh.coarse_cells_across=7"]  # 16 / 2.25
+    g = float(sets[2].split("=")[1])
+    assert g == pytest.approx(1.1**2.25, rel=1e-12)
+    coarse = load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.3", "mesh.cells_across=72"])
+    assert companion_overrides(coarse, 32)[2] == "mesh.growth_rate=1.5"  # within its range

@@ -21,6 +21,7 @@ from typing import Any
 
 from foamsilo.errors import FoamsiloError
 from foamsilo.post.convergence import GridConvergence, grid_convergence
+from foamsilo.scene import Scene
 
 #: The companions' table in the case directory
 GRID_JSON = "grid.json"
@@ -46,6 +47,27 @@ def coarser_cells(cells_across: int, ratio: float = GRID_RATIO) -> list[int]:
             f"cells across; allowed: at least 4, all different (give more cells across)"
         )
     return cells
+
+
+def companion_overrides(scene: Scene, cells: int) -> list[str]:
+    """Return the ``--set`` values that put ``scene`` on the companion grid of ``cells``.
+
+    A graded mesh is refined as a whole: its largest cells and its growth per
+    cell follow the fine cells (``coarse_cells_across`` scaled, the growth
+    rate raised to the refinement ratio, within its allowed range), so that
+    the three grids are one family; with the largest cells held, the coarse
+    region would not be refined and the GCI would miss its error.
+    """
+    from foamsilo.scene import format_override
+
+    sets = [format_override("mesh.cells_across", cells)]
+    m = scene.mesh
+    if m.graded:
+        k = scene.cells_across / cells
+        sets.append(format_override("mesh.coarse_cells_across",
+                                    max(2, round(m.coarse_cells_across / k))))  # fmt: skip
+        sets.append(format_override("mesh.growth_rate", min(1.5, m.growth_rate**k)))
+    return sets
 
 
 @dataclass(frozen=True)
