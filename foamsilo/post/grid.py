@@ -21,7 +21,7 @@ from typing import Any
 
 from foamsilo.errors import FoamsiloError
 from foamsilo.post.convergence import GridConvergence, grid_convergence
-from foamsilo.scene import Scene
+from foamsilo.scene import Scene, format_override
 
 #: The companions' table in the case directory
 GRID_JSON = "grid.json"
@@ -58,8 +58,6 @@ def companion_overrides(scene: Scene, cells: int) -> list[str]:
     the three grids are one family; with the largest cells held, the coarse
     region would not be refined and the GCI would miss its error.
     """
-    from foamsilo.scene import format_override
-
     sets = [format_override("mesh.cells_across", cells)]
     m = scene.mesh
     if m.graded:
