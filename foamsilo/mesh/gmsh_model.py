@@ -19,10 +19,12 @@ import ctypes
 import multiprocessing
 import signal
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
 import gmsh
+import numpy as np
 
 from foamsilo.errors import MeshError
 
@@ -87,6 +89,23 @@ def build_isolated(builder: Callable[..., T], *args: Any) -> T:
         message, geometry = payload
         raise MeshError(message.split(" (geometry written to")[0], geometry)
     raise MeshError(f"meshing failed: {payload}")
+
+
+@dataclass(frozen=True)
+class Carve:
+    """A shape cut out of patch ``source``: the rest of its faces go to patch ``target``.
+
+    The faces kept are those nearest the shape's centre (``distance`` of
+    their centres, an (n, 3) array, in the shape's own norm) whose areas add
+    up closest to ``area``: the cut holds the shape's area to within half a
+    face, whatever the cells. ``name`` says what the shape is (in errors).
+    """
+
+    source: str
+    target: str
+    distance: Callable[[np.ndarray], np.ndarray]
+    area: float
+    name: str
 
 
 class Session:
@@ -164,11 +183,14 @@ class Session:
         patch_order: list[str],
         dump_geometry: Path | None = None,
         node_map: Callable[[float, float, float], tuple[float, float, float]] | None = None,
+        carve: Carve | None = None,
     ) -> None:
-        """Add one physical group per patch (in ``patch_order``) and the volume; mesh; write.
+        """Mesh; add one physical group per patch (in ``patch_order``) and the volume; write.
 
         ``node_map`` moves every node of the generated mesh before it is
         written (a hopper meshed as a cylinder, then mapped onto its cone).
+        ``carve`` moves the faces of one patch that lie outside a shape to
+        another patch (a circular hole cut out of a rectangle of wall faces).
 
         Raises
         ------
@@ -176,26 +198,70 @@ class Session:
             A patch has no surface, or gmsh failed to mesh (geometry dumped).
         """
         for name in patch_order:
-            tags = sorted(set(self.patches.get(name, [])))
-            if not tags:
+            if not self.patches.get(name):
                 raise self.fail(f"no surface for patch {name!r}")
-            gmsh.model.addPhysicalGroup(2, tags, name=name)
         unknown = set(self.patches) - set(patch_order)
         if unknown:
             raise self.fail(f"surfaces recorded for unknown patches {sorted(unknown)}")
-        volumes = [t for _, t in gmsh.model.getEntities(3)]
-        gmsh.model.addPhysicalGroup(3, volumes, name="silo")
         if dump_geometry is not None:
             self.dump(dump_geometry)
         try:
             gmsh.model.mesh.generate(3)
         except Exception as exc:
             raise self.fail(f"gmsh failed: {exc}") from exc
+        if carve is not None:
+            self._carve(carve)
+        for name in patch_order:
+            gmsh.model.addPhysicalGroup(2, sorted(set(self.patches[name])), name=name)
+        volumes = [t for _, t in gmsh.model.getEntities(3)]
+        gmsh.model.addPhysicalGroup(3, volumes, name="silo")
         if node_map is not None:
             map_nodes(node_map)
         gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
         gmsh.option.setNumber("Mesh.Binary", 0)  # gmshToFoam reads ASCII only
         gmsh.write(str(self.msh_file))
+
+    def _carve(self, carve: Carve) -> None:
+        """Keep the faces of ``carve.source`` that make up the shape; move the rest to ``target``.
+
+        The faces that leave go to a new discrete surface each (gmsh keeps
+        their nodes), recorded in the target patch.
+
+        Raises
+        ------
+        MeshError
+            The source patch's faces cannot hold the shape's area.
+        """
+        blocks = []  # (entity, element type, tags, node tags, distances, areas)
+        for ent in sorted(set(self.patches[carve.source])):
+            for typ in gmsh.model.mesh.getElementTypes(2, ent):
+                got_tags, got_nodes = gmsh.model.mesh.getElementsByType(typ, ent)
+                conn = np.asarray(got_nodes).reshape(len(got_tags), -1)
+                centres = np.asarray(gmsh.model.mesh.getBarycenters(typ, ent, False, True))
+                near = np.asarray(carve.distance(centres.reshape(-1, 3)), dtype=float)
+                blocks.append((ent, typ, np.asarray(got_tags), conn, near, _face_areas(conn)))
+        dist = np.concatenate([b[4] for b in blocks])
+        areas = np.concatenate([b[5] for b in blocks])
+        order = np.argsort(dist, kind="stable")
+        total = np.cumsum(areas[order])
+        if total[-1] < carve.area:
+            raise self.fail(f"the faces of patch {carve.source!r} cannot hold the {carve.name}")
+        k = int(np.argmin(np.abs(total - carve.area))) + 1
+        keep = np.zeros(len(dist), dtype=bool)
+        keep[order[:k]] = True
+        moved: list[int] = []
+        start = 0
+        for ent, typ, etags, enodes, d, _ in blocks:
+            inside = keep[start : start + len(d)]
+            start += len(d)
+            if inside.all():
+                continue
+            gmsh.model.mesh.removeElements(2, ent, etags[~inside].tolist())
+            new = gmsh.model.addDiscreteEntity(2)
+            gmsh.model.mesh.addElements(2, new, [typ], [etags[~inside].tolist()],
+                                        [enodes[~inside].ravel().tolist()])  # fmt: skip
+            moved.append(new)
+        self.patches.setdefault(carve.target, []).extend(moved)
 
     def element_kinds(self) -> dict[str, int]:
         """Count the 3D elements of each kind in the generated mesh."""
@@ -206,6 +272,19 @@ class Session:
             name = names.get(int(t), f"type{int(t)}")
             out[name] = out.get(name, 0) + len(tg)
         return out
+
+
+def _face_areas(conn: np.ndarray) -> np.ndarray:
+    """Areas of the mesh's faces with these node tags (one row per face; fan triangles)."""
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    where = {int(t): i for i, t in enumerate(tags)}
+    xyz = np.asarray(coords).reshape(-1, 3)[[where[int(n)] for n in conn.ravel()]]
+    xyz = xyz.reshape(conn.shape[0], conn.shape[1], 3)
+    area = np.zeros(conn.shape[0])
+    for i in range(1, conn.shape[1] - 1):
+        a, b = xyz[:, i] - xyz[:, 0], xyz[:, i + 1] - xyz[:, 0]
+        area += 0.5 * np.linalg.norm(np.cross(a, b), axis=1)
+    return area
 
 
 def map_nodes(transform: Callable[[float, float, float], tuple[float, float, float]]) -> None:

@@ -418,9 +418,10 @@ def ogrid_for(scene: Scene) -> OGrid:
     coarse = COARSE_RATIO_3D * h
     q = math.pi / 4
     if s.orifice_position == "lateral":
-        assert s.orifice_length is not None
-        tw = s.orifice_length / (2 * R)
-        n_orf = max(2, round(s.orifice_length / h))
+        arc = s.lateral_arc_length
+        assert arc is not None
+        tw = arc / (2 * R)
+        n_orf = max(2, round(arc / h))
         n_side = max(MIN_QUADRANT_CELLS // 2, round((q - tw) * R / (2 * h)))
         n_b = max(MIN_QUADRANT_CELLS, round(2 * q * R / (2 * h)))
         quad0 = ((-q, -tw, n_side), (-tw, tw, n_orf), (tw, q, n_side))
@@ -461,9 +462,7 @@ def cells_estimate(scene: Scene) -> int:
     if s.shape == "rectangular":
         W = s.thickness or h
         return scene.cells_across * max(2, round(W / h)) * layers
-    if s.eccentricity > 0 or (
-        s.orifice_position == "lateral" and s.resolved_orifice_shape == "circular"
-    ):
+    if s.eccentricity > 0:
         # unstructured: cross-section area over the mean cell area, roughly
         return round(math.pi * (s.width / 2) ** 2 / (2 * h) ** 2) * layers
     return ogrid_for(scene).n_cells * layers

@@ -8,8 +8,8 @@ extruded row by row (:func:`foamsilo.mesh.layout.vertical_rows`); the face
 swept from a rim curve in a row is ``walls``, or ``orifice`` where the curve
 belongs to a lateral orifice and the row lies inside it. A hopper is meshed
 as its cylinder and its nodes are then moved radially onto the cone. A
-circular hole in a curved wall has no hexahedral layout: it is meshed with
-tetrahedra (the fall-back).
+circular hole in a cylinder's wall is the band it spans, swept as orifice,
+with the faces outside its circle given back to the wall.
 """
 
 from __future__ import annotations
@@ -19,8 +19,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import gmsh
+import numpy as np
 
-from foamsilo.mesh.gmsh_model import Session
+from foamsilo.mesh.gmsh_model import Carve, Session
 from foamsilo.mesh.layout import (
     ATMOSPHERE,
     COARSE_RATIO_3D,
@@ -296,71 +297,6 @@ def _sweep(s: Session, section: Section, rows: list[Row], band: tuple[float, flo
     s.add_patch(ATMOSPHERE, [t for _, t in base])
 
 
-def _build_tet(s: Session, scene: Scene) -> None:
-    """Tetrahedra for a circular hole in a curved wall (no hexahedral layout fits it).
-
-    The silo is a disk swept to the top (its floor and top are the sweep's
-    ends); the hole is a cylinder along +x whose part outside the silo is cut
-    away, and the faces it shared with the silo are the orifice.
-    """
-    sil = scene.silo
-    occ = s.occ
-    h = scene.cell_size
-    R, r = sil.width / 2, sil.orifice_width / 2
-    assert sil.orifice_height is not None
-    yc = sil.orifice_height + r
-    silo = occ.addCylinder(0, 0, 0, 0, sil.height, 0, R)
-    tool = occ.addCylinder(0, yc, 0, 2 * R, 0, 0, r)
-    _, mapping = occ.fragment([(3, silo)], [(3, tool)])
-    occ.synchronize()
-    inside = {t for _, t in mapping[0]}
-    outside = [t for _, t in mapping[1] if t not in inside]
-    kept_faces = {f for v in inside for f in s.boundary(3, v)}
-    orifice = sorted({f for v in outside for f in s.boundary(3, v)} & kept_faces)
-    occ.remove([(3, t) for t in outside], recursive=True)
-    occ.synchronize()
-    boundary = [
-        f for _, f in gmsh.model.getBoundary([(3, v) for v in sorted(inside)], combined=True)
-    ]
-    floor_top = []
-    for f in (abs(f) for f in boundary):
-        if f in orifice:
-            continue
-        # the cylinder's two caps: the only flat faces normal to y (OCC pads
-        # bounding boxes by ~1e-7 m)
-        _, ymin, _, _, ymax, _ = gmsh.model.getBoundingBox(2, f)
-        if ymax - ymin < 1e-3 * h:
-            floor_top.append((f, ymin))
-    s.add_patch(ORIFICE, orifice)
-    for f, y in floor_top:
-        s.add_patch(ATMOSPHERE if y > 0.5 * sil.height else WALLS, [f])
-    s.add_patch(
-        WALLS,
-        [
-            abs(f)
-            for f in boundary
-            if abs(f) not in orifice and abs(f) not in {t for t, _ in floor_top}
-        ],
-    )
-    fld = gmsh.model.mesh.field
-    dist = fld.add("Distance")
-    fld.setNumbers(dist, "SurfacesList", orifice)
-    thr = fld.add("Threshold")
-    fld.setNumber(thr, "InField", dist)
-    fld.setNumber(thr, "SizeMin", h)
-    fld.setNumber(thr, "SizeMax", COARSE_RATIO_3D * h)
-    fld.setNumber(thr, "DistMin", r)
-    fld.setNumber(thr, "DistMax", 4 * r + R)
-    fld.setAsBackgroundMesh(thr)
-    for opt, val in (
-        ("Mesh.MeshSizeExtendFromBoundary", 0),
-        ("Mesh.MeshSizeFromPoints", 0),
-        ("Mesh.MeshSizeFromCurvature", 0),
-        ("Mesh.Optimize", 1),
-    ):
-        gmsh.option.setNumber(opt, val)
-
-
 def build_3d(
     scene: Scene, msh_file: Path, dump_geometry: Path | None = None
 ) -> tuple[int | None, str]:
@@ -374,14 +310,6 @@ def build_3d(
     sil = scene.silo
     order = patch_order("3d")
     with Session("silo3d", msh_file) as s:
-        if (
-            sil.shape == "cylindrical"
-            and sil.orifice_position == "lateral"
-            and (sil.resolved_orifice_shape == "circular")
-        ):
-            _build_tet(s, scene)
-            s.write(order, dump_geometry)
-            return None, "tetrahedral"
         rows = vertical_rows(scene)
         n_section: int | None
         if sil.shape == "rectangular":
@@ -405,13 +333,53 @@ def build_3d(
                 k = _interp(y, ys, rs) / R
                 return x * k, y, z * k
 
-        s.write(order, dump_geometry, node_map)
+        s.write(order, dump_geometry, node_map, _hole(scene))
         kinds = s.element_kinds()
     kind = "hexahedral"
     if set(kinds) - {"hexahedra"}:
         kind = "hex-dominant (" + ", ".join(f"{v} {k}" for k, v in sorted(kinds.items())) + ")"
     n = None if n_section is None else n_section * sum(r.n for r in rows)
     return n, kind
+
+
+def _hole(scene: Scene) -> Carve | None:
+    """Return the cut of a circular hole drilled along +x through a cylinder's wall.
+
+    The band of the wall the hole spans (its height, and its arc at the
+    centre height) is swept as orifice; the faces nearest the hole's axis,
+    in sqrt(z^2 + (y - y_c)^2), whose areas add up to the hole's (the disc's
+    area on the curved wall, :func:`hole_area`) stay orifice, the others go
+    back to the wall: a staircase of whole faces with the hole's area.
+    """
+    sil = scene.silo
+    if not (
+        sil.shape == "cylindrical"
+        and sil.orifice_position == "lateral"
+        and sil.resolved_orifice_shape == "circular"
+    ):
+        return None
+    assert sil.orifice_height is not None
+    r = sil.orifice_width / 2
+    yc = sil.orifice_height + r
+
+    def distance(c: np.ndarray) -> np.ndarray:
+        return np.asarray(np.hypot(c[:, 2], c[:, 1] - yc))
+
+    area = hole_area(sil.width / 2, r)
+    return Carve(ORIFICE, WALLS, distance, area, "circular lateral orifice")
+
+
+def hole_area(R: float, r: float) -> float:
+    """Area of the wall of a cylinder (radius R) inside a hole of radius r drilled along its radius.
+
+    The wall at z = R sin(theta) has the area element dz dy / sqrt(1 - z^2/R^2):
+    ``A = int_{-r}^{r} 2 sqrt(r^2 - z^2) / sqrt(1 - z^2/R^2) dz`` (pi r^2 for R -> inf).
+    """
+    from scipy.integrate import quad
+
+    value, _ = quad(lambda z: 2 * math.sqrt(max(r * r - z * z, 0.0)) / math.sqrt(1 - (z / R) ** 2),
+                    -r, r)  # fmt: skip
+    return float(value)
 
 
 def _interp(x: float, xs: tuple[float, ...], ys: tuple[float, ...]) -> float:

@@ -130,6 +130,20 @@ class Silo:
             return "circular"
         return "rectangular"
 
+    @property
+    def lateral_arc_length(self) -> float | None:
+        """Arc length of the wall a lateral orifice on a cylinder spans at its widest [m].
+
+        A rectangle: its ``orifice_length``. A circular hole (drilled along the
+        radius): 2 R asin(r/R) at its centre height, r = D/2.
+        """
+        if self.orifice_position != "lateral" or self.shape != "cylindrical":
+            return None
+        if self.resolved_orifice_shape == "rectangular":
+            return self.orifice_length
+        R, r = self.width / 2, self.orifice_width / 2
+        return 2 * R * math.asin(min(1.0, r / R))
+
     def wall_radius(self, y: float) -> float:
         """Half-width (radius) of the silo wall at height y [m]."""
         return float(_interp(y, *zip(*self.profile, strict=True)))

@@ -144,6 +144,8 @@ def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
         simulated_time_s=s.get("simulated_time_s"),
         Q_time_error=s.get("Q_time_error"),
         Q_step_swing=s.get("Q_step_swing"),
+        # the mean pore-pressure gradient over the zone above the orifice (gas scenes)
+        zone_gradient_scaled=(s.get("pore_pressure") or {}).get("zone_gradient_scaled"),
     )
 
 

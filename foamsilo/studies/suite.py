@@ -235,16 +235,6 @@ def beverloo(
 
 
 # ---------------------------------------------------------- gas-assisted lab
-def _zone_gradient(case: Path) -> float | None:
-    """Mean dp_f/dz over the zone of radius D/2 above the orifice, over rho g (summary.json)."""
-    summary = case / "summary.json"
-    if not summary.exists():
-        return None
-    pp = json.loads(summary.read_text()).get("pore_pressure") or {}
-    value = pp.get("zone_gradient_scaled")
-    return float(value) if value is not None and math.isfinite(value) else None
-
-
 def gas_lab(
     quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
@@ -280,7 +270,6 @@ def gas_lab(
     rows = run_rows(cases, work / "gas-lab", jobs, limit, on_row)
     for r, (d, q) in zip(rows, keys, strict=True):
         r["grain_diameter"], r["q_air_lpm"] = d, q
-        r["zone_gradient_scaled"] = _zone_gradient(Path(r["case_dir"])) if q is not None else None
     data = {"rows": rows}
     derive_gas_lab(data)
     return data
