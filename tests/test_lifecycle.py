@@ -300,7 +300,7 @@ def test_a_killed_sweep_leaves_no_orphan_and_resumes(tmp_path, solver):
 
 @pytest.mark.openfoam
 def test_ctrl_c_during_meshing_stops_at_once_and_leaves_nothing(tmp_path, openfoam):
-    # a 3D tetrahedral mesh takes gmsh several seconds
+    # a 3D mesh of ~400k cells takes gmsh several seconds
     args = ["new", "zhou-cyl-lateral", "-o", str(tmp_path / "c"), "--set", "mesh.cells_across=40"]
     p = start(args)
     time.sleep(2.0)

@@ -123,6 +123,8 @@ def test_one_work_precision_series_is_named_and_a_wrong_one_listed(tmp_path):
         run_suite(False, tmp_path, tmp_path, only=["work-precision/nope"])
     with pytest.raises(FoamsiloError, match=r"'beverloo/venier'"):
         run_suite(False, tmp_path, tmp_path, only=["beverloo/venier"])
+    with pytest.raises(FoamsiloError, match=r"'presets/nope'.*presets/zhou-cyl-lateral"):
+        run_suite(False, tmp_path, tmp_path, only=["presets/nope"])
     assert not any(tmp_path.iterdir())  # refused before anything ran or was written
 
 
@@ -192,3 +194,30 @@ def test_gas_rows_are_judged_on_eq17_with_their_own_zone_gradient():
     assert not by_name["4.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
     assert by_name["None: steady at its defaults"].passed
     assert not by_name["4.0: steady at its defaults"].passed
+
+
+def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
+    import json
+
+    from foamsilo.studies import suite
+
+    def row(name, q):
+        return {"label": name, "preset": name, "outcome": "steady", "Q": q, "Q_std": 0.0,
+                "representation": "planar", "scheme": "lagged",
+                "flow_rate_scale": "rho sqrt(g L^3)"}  # fmt: skip
+
+    old = {"presets": {"rows": [row("zhou-planar", 1.0), row("venier-test1", 2.0)]},
+           "wall_s": {}, "commits": {}}  # fmt: skip
+    (tmp_path / "suite.json").write_text(json.dumps(old))
+    ran = []
+
+    def fake(quick, work, jobs, limit, on_row=None, only=None):
+        ran.append(only)
+        return {"rows": [row(only, 3.0)]}
+
+    monkeypatch.setattr(suite, "presets", fake)
+    result = suite.run_suite(False, tmp_path, tmp_path / "work", only=["presets/zhou-planar"])
+    assert ran == ["zhou-planar"]
+    q = {r["label"]: r["Q"] for r in result["presets"]["rows"]}
+    assert q == {"venier-test1": 2.0, "zhou-planar": 3.0}
+    assert "| zhou-planar | planar | lagged |" in (tmp_path / "suite.md").read_text()

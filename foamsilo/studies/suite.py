@@ -394,15 +394,24 @@ def derive_time_step(data: dict[str, Any]) -> None:
 
 # ------------------------------------------------------------------- presets
 def presets(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool,
+    work: Path,
+    jobs: int,
+    limit: float,
+    on_row: OnRow = None,
+    only: str | None = None,
 ) -> dict[str, Any]:
-    """Every preset (each seed scene of the papers) at its own defaults, to its end time."""
+    """Every preset (each seed scene of the papers) at its own defaults, to its end time.
+
+    ``only`` runs that preset alone.
+    """
     from foamsilo.scene import load_preset, preset_names
 
     entry = study_table("suite")["presets"]
-    names = entry["quick"] if quick else preset_names()
+    names = [only] if only else (entry["quick"] if quick else preset_names())
     cases = [StudyCase(n, n, []) for n in names]
-    rows = run_rows(cases, work / "presets", jobs, limit, on_row)
+    rows = run_rows(cases, work / ("presets" if only is None else f"presets-{only}"), jobs,
+                    limit, on_row)  # fmt: skip
     for r in rows:
         scene = load_preset(r["preset"])
         r["representation"] = scene.representation
@@ -517,21 +526,26 @@ def run_suite(
     on_row: OnRow = None,
 ) -> dict[str, Any]:
     """Run the suite; write ``suite[-quick].json`` and ``.md`` with plots into ``out_dir``."""
+    from foamsilo.scene import preset_names
+
     names = only or list(ENTRIES)
-    # "work-precision/NAME": one series of an entry, merged into the others
+    # "work-precision/NAME" (one series) or "presets/NAME" (one preset): a part
+    # of an entry, merged into the others
     split = [(n.partition("/")[0], n.partition("/")[2]) for n in names]
-    series = work_precision_series()
+    parts = {"work-precision": work_precision_series(), "presets": preset_names()}
     bad = [
         f"{n}/{sub}" if sub else n
         for n, sub in split
-        if n not in ENTRIES or (sub and (n != "work-precision" or sub not in series))
+        if n not in ENTRIES or (sub and sub not in parts.get(n, []))
     ]
     if bad:
         raise FoamsiloError(
             f"unknown suite entry {bad[0]!r}; valid: "
             + ", ".join(ENTRIES)
             + "; or one series: "
-            + ", ".join(f"work-precision/{k}" for k in series)
+            + ", ".join(f"work-precision/{k}" for k in parts["work-precision"])
+            + "; or one preset: "
+            + ", ".join(f"presets/{k}" for k in parts["presets"])
         )
     stem = "suite-quick" if quick else "suite"
     result: dict[str, Any] = {}
@@ -545,7 +559,13 @@ def run_suite(
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs})
     for name, sub in split:
         t0 = time.perf_counter()
-        if sub:
+        if sub and name == "presets":
+            part = presets(quick, Path(work_dir) / name, jobs, limit, on_row, only=sub)
+            rows = {r["label"]: r for r in (result.get(name) or {}).get("rows", [])}
+            rows.update({r["label"]: r for r in part["rows"]})
+            result[name] = {"rows": [rows[k] for k in sorted(rows)]}
+            key = f"{name}/{sub}"
+        elif sub:
             part = work_precision(quick, Path(work_dir) / name, jobs, limit, on_row, series=sub)
             result[name] = {**(result.get(name) or {}), **part}
             key = f"{name}/{sub}"
@@ -556,7 +576,7 @@ def run_suite(
         commits[key] = git_commit()
     result["wall_s"] = timing
     result["commits"] = commits
-    result["commit"] = ", ".join(sorted(set(commits.values()), key=str))
+    result["commit"] = ", ".join(sorted({str(c) for c in commits.values() if c}))
     return write_report(result, out_dir, stem)
 
 
