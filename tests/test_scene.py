@@ -249,3 +249,25 @@ def test_user_guide_example_scene_is_valid(tmp_path):
     s = load_scene_file(tmp_path / "s.toml")
     assert s.representation == "axisymmetric"  # auto: a centred cylinder needs no 3D mesh
     assert s.gas.taps == (0.05, 0.1, 0.2)
+
+
+def test_the_stress_coupling_follows_the_column():
+    """Implicit where a column's wall stress carries the pressure (docs/solver.md, "Tall columns")."""
+    from foamsilo.scene import load_preset
+
+    coupling = {n: load_preset(n).stress_pressure_coupling for n in (
+        "zhou-planar", "zhou-cyl-bottom", "zhou-rect-bottom", "zhou-planar-gas",
+        "zhou-cyl-lateral", "zhou-cyl-lateral-rect", "venier-test2")}  # fmt: skip
+    assert coupling == {
+        "zhou-planar": "lagged",  # 3.9 widths
+        "zhou-cyl-bottom": "implicit",  # axisymmetric
+        "zhou-rect-bottom": "implicit",  # quasi-2D wall friction
+        "zhou-planar-gas": "implicit",  # wall friction, gas-coupled
+        "zhou-cyl-lateral": "implicit",  # 3D, 12.5 widths
+        "zhou-cyl-lateral-rect": "lagged",  # 3D, 8.3 widths
+        "venier-test2": "lagged",  # 3D, 1.5 widths
+    }
+    tall = load_preset("zhou-planar", ["silo.height=2.0", "silo.fill_height=1.95"])
+    assert tall.stress_pressure_coupling == "implicit"
+    forced = load_preset("zhou-cyl-lateral", ["numerics.stress_pressure_coupling='lagged'"])
+    assert forced.stress_pressure_coupling == "lagged"

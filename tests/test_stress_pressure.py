@@ -87,7 +87,7 @@ def test_a_tall_planar_column_is_steady_at_its_defaults(tmp_path, solver):
     Lagged, its rate swings by 13% from one step to the next (7% at 32 across;
     up to 8 widths high the swing stays under 0.3%), so a planar column filled
     higher than 10 widths gets the implicit coupling by default (docs/solver.md,
-    "Tall planar columns"). Tolerances: the swing under the 1% above which
+    "Tall columns"). Tolerances: the swing under the 1% above which
     the report warns of a numerical oscillation; Q within 2% of the preset's
     column (3.9 widths) on the same scheme and grid, since a silo's rate does
     not depend on its fill once the column is a few widths high (Janssen's

@@ -19,11 +19,11 @@ from foamsilo.scene.schema import field_spec as _f
 GRAVITY = 9.81
 #: Opening angle of an axisymmetric wedge mesh [deg] (OpenFOAM: at most 5)
 WEDGE_ANGLE_DEG = 5.0
-#: Fill height over width above which a planar column gets the implicit
+#: Fill height over width above which a planar or 3D column gets the implicit
 #: stress-pressure coupling by default: there the lagged wall stress carries
 #: the last iterate's pressure down the column and the rate swings from step
-#: to step (docs/solver.md, "Tall planar columns")
-TALL_PLANAR_COLUMN = 10.0
+#: to step, or the run diverges (docs/solver.md, "Tall columns")
+TALL_COLUMN = 10.0
 
 Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 
@@ -442,8 +442,8 @@ class Numerics:
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
         "iteration, where a tall column's wall stress feeds the pressure back; default: "
-        "implicit in axisymmetric scenes, ones with quasi-2D wall friction and planar "
-        "columns filled higher than 10 widths, lagged in other planar and 3D ones (why: "
+        "implicit in axisymmetric scenes, ones with quasi-2D wall friction and columns "
+        "filled higher than 10 widths, lagged in other planar and 3D ones (why: "
         "docs/solver.md)",
         default=None,
     )
@@ -546,12 +546,9 @@ class Scene:
         if self.numerics.stress_pressure_coupling is not None:
             return self.numerics.stress_pressure_coupling
         # where a tall column's wall stress carries the pressure (docs/solver.md)
-        planar_tall = (
-            self.representation == "planar"
-            and self.silo.fill_height > TALL_PLANAR_COLUMN * self.silo.width
-        )
-        tall_column = self.representation == "axisymmetric" or self.wall_friction or planar_tall
-        return "implicit" if tall_column else "lagged"
+        tall = self.silo.fill_height > TALL_COLUMN * self.silo.width
+        implicit = self.representation == "axisymmetric" or self.wall_friction or tall
+        return "implicit" if implicit else "lagged"
 
     @property
     def outer_correctors(self) -> int:
