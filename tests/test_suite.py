@@ -60,12 +60,18 @@ def test_checks_flag_a_figure_outside_its_tolerance():
     ]
     result = {
         "work-precision": {
-            "zhou-planar": {"rows": [{"cells_across": 16, "Q_dimensionless": 0.12}]},
+            "zhou-planar": {"rows": [
+                {"cells_across": 16, "Q_dimensionless": 0.12, "outcome": "steady"},
+                {"cells_across": 24, "Q_dimensionless": 0.154, "outcome": "steady"},
+                {"cells_across": 32, "Q_dimensionless": 0.157, "outcome": "oscillating"},
+            ]},
             "zhou-cyl-bottom": {"rows": rows},
         }
-    }
+    }  # fmt: skip
     by_name = {c.name: c for c in checks(result)}
     assert not by_name["planar 16 across: Q*"].passed  # 0.12 is outside 0.16 +- 15%
+    assert by_name["planar 24 across: Q*"].passed
+    assert not by_name["planar 32 across: Q*"].passed  # an oscillating rate is no Q*
     assert by_name["lab silo: Q rises with resolution"].passed
     assert by_name["lab silo, 36 across: |Q flux / Q volume - 1|"].passed
     # two estimates of one rate 3% apart: the check fails (tolerance 1%)
