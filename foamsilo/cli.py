@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import sys
 import tempfile
 import time
@@ -405,6 +406,8 @@ def cmd_run(args: argparse.Namespace) -> int:
         update=args.update,
         reconstruct=args.reconstruct,
     )
+    if args.slurm:
+        return _run_on_slurm(args, spec)
     with _progress(args) as progress:
         if args.grid_error:
             summary = grid_study(spec, progress=progress, say=_say(args))
@@ -413,6 +416,44 @@ def cmd_run(args: argparse.Namespace) -> int:
     s = summary.as_json()
     _emit(args, {"ok": True, **s}, lambda: _print_summary(s))
     return 0
+
+
+def _slurm_options(
+    args: argparse.Namespace, base: Any = None, time_limit: str | None = None
+) -> Any:
+    """Return the Slurm options of the command line, over ``base`` (a sweep file's)."""
+    from foamsilo.slurm import SlurmOptions
+
+    return (base or SlurmOptions()).merged(
+        partition=args.partition,
+        account=args.account,
+        time_limit=time_limit or getattr(args, "time_limit", None),
+        sbatch=tuple(args.sbatch or ()),
+        poll_seconds=args.poll,
+    )
+
+
+def _run_on_slurm(args: argparse.Namespace, spec: Any) -> int:
+    """``run --slurm``: the case as one batch job, followed to its end."""
+    from dataclasses import replace
+
+    from foamsilo.slurm import SlurmBackend
+
+    for flag, given in (("--grid-error", args.grid_error), ("--hostfile", args.hostfile)):
+        if given:
+            raise UsageError(flag, "not with --slurm (a job runs on the nodes Slurm gives it)")
+    # a job that is submitted again goes on from the case's latest complete time
+    spec = replace(spec, resume=not (spec.rerun or spec.overwrite))
+    backend = SlurmBackend(_slurm_options(args), say=_say(args))
+    (outcome,) = backend.run([spec])
+    if outcome.ok and outcome.summary is not None:
+        s = outcome.summary
+        _emit(args, {"ok": True, **s}, lambda: _print_summary(s))
+        return 0
+    err = outcome.error or {"type": outcome.status, "message": outcome.status}
+    _emit(args, {"ok": False, "error": err},
+          lambda: _console(stderr=True).print(f"[red]error[/]: {err.get('message')}"))  # fmt: skip
+    return 1
 
 
 def cmd_post(args: argparse.Namespace) -> int:
@@ -440,7 +481,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from foamsilo.sweep import load_sweep, run_sweep
 
     sweep = load_sweep(Path(args.sweep))
-    rows = run_sweep(sweep, log=_say(args))
+    backend = None
+    if args.backend == "slurm":
+        from foamsilo.slurm import SlurmBackend
+
+        backend = SlurmBackend(_slurm_options(args, sweep.slurm), say=_say(args))
+    rows = run_sweep(sweep, log=_say(args), backend=backend)
     failed = [r for r in rows if r["status"] != "ok"]
 
     def human() -> None:
@@ -594,13 +640,24 @@ def cmd_bench_validation(args: argparse.Namespace) -> int:
     if args.report_only:
         res = rewrite_report(args.quick, Path(args.output))
     else:
+        jobs: Any = args.jobs
+        if args.backend == "slurm":
+            from foamsilo.slurm import SlurmBackend
+
+            if not args.work_dir:
+                raise UsageError(
+                    "--work-dir", "required with --backend slurm: a directory the nodes share"
+                )
+            # the job's limit: the solver's wall limit, and time to mesh and reduce
+            minutes = str(int(math.ceil(args.time_limit / 60.0)) + 10)
+            jobs = SlurmBackend(_slurm_options(args, time_limit=minutes), say=_say(args))
         with _work_dir(args, "foamsilo-suite-") as work:
             res = run_suite(
                 args.quick,
                 Path(args.output),
                 work,
                 args.only or None,
-                jobs=args.jobs,
+                jobs=jobs,
                 limit=args.time_limit,
                 on_row=_row_printer(args),
             )
@@ -833,6 +890,22 @@ def build_parser() -> argparse.ArgumentParser:
         sp.set_defaults(func=func)
         return sp
 
+    def slurm_args(sp: Any, time_limit: bool = True) -> None:
+        g = sp.add_argument_group("Slurm (with --slurm or --backend slurm)")
+        g.add_argument("--partition", help="sbatch --partition")
+        g.add_argument("--account", help="sbatch --account")
+        if time_limit:
+            g.add_argument("--time-limit", help="sbatch --time per job (MM, HH:MM:SS, D-HH)")
+        g.add_argument(
+            "--sbatch",
+            action="append",
+            metavar="OPTION",
+            help="a further #SBATCH option, e.g. --sbatch=--qos=short (repeatable)",
+        )
+        g.add_argument(
+            "--poll", type=float, default=None, help="seconds between reads of the queue (5)"
+        )
+
     def scene_args(sp: Any) -> None:
         sp.add_argument("scene", help="preset name or scene TOML file")
         sp.add_argument(
@@ -920,12 +993,24 @@ def build_parser() -> argparse.ArgumentParser:
         help="after a parallel run, merge the processor directories (reconstructPar)",
     )
     sp.add_argument("--quiet", action="store_true", help="no progress bar, no messages")
-
-    sp = add(
-        sub, "sweep", cmd_sweep, "run the cases of a sweep file under a CPU budget (resumable)"
+    sp.add_argument(
+        "--slurm",
+        action="store_true",
+        help="run the case as a Slurm batch job (--ntasks = its ranks) and follow it",
     )
+    slurm_args(sp)
+
+    sp = add(sub, "sweep", cmd_sweep, "run the cases of a sweep file here or on Slurm (resumable)")
     sp.add_argument("sweep", help="sweep TOML file (see foamsilo/sweep.py for the format)")
     sp.add_argument("--quiet", action="store_true", help="no per-case messages")
+    sp.add_argument(
+        "--backend",
+        choices=["local", "slurm"],
+        default="local",
+        help="local: worker processes under the sweep's CPU budget; slurm: one batch job "
+        "per case (options from the sweep's [slurm] table and the command line)",
+    )
+    slurm_args(sp)
 
     sp = add(sub, "post", cmd_post, "reduce a case: Q(t), steady Q, fields, pictures, report")
     sp.add_argument("case", help="case directory")
@@ -1002,6 +1087,14 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="write the report again from the suite's JSON in the report directory (no runs)",
     )
+    sp.add_argument(
+        "--backend",
+        choices=["local", "slurm"],
+        default="local",
+        help="local: --jobs cases at a time here; slurm: one batch job per case (with "
+        "--work-dir on a shared filesystem; each job's --time is --time-limit + 10 min)",
+    )
+    slurm_args(sp, time_limit=False)
 
     sp = add(
         forms,

@@ -30,7 +30,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from foamsilo.case import (
     RUN_RECORD,
@@ -676,6 +676,42 @@ class Budget:
         return max(1, self.cores // self.ranks_per_case)
 
 
+class Backend(Protocol):
+    """Where many cases run: this machine (:class:`LocalBackend`) or a cluster.
+
+    The Slurm backend (:class:`foamsilo.slurm.SlurmBackend`) runs the same
+    worker in batch jobs; sweeps and studies take either.
+    """
+
+    def run(
+        self, specs: list[CaseSpec], on_done: Callable[[Outcome], None] | None = None
+    ) -> list[Outcome]:
+        """Prepare, run and reduce the cases; one outcome each, in order."""
+        ...
+
+
+@dataclass
+class LocalBackend:
+    """Many cases on this machine, in worker processes under a CPU budget."""
+
+    budget: Budget = field(default_factory=Budget)
+
+    def run(
+        self, specs: list[CaseSpec], on_done: Callable[[Outcome], None] | None = None
+    ) -> list[Outcome]:
+        """See :func:`run_many`."""
+        return run_many(specs, self.budget, on_done)
+
+
+def case_ranks(spec: CaseSpec) -> int:
+    """Return the MPI ranks a case runs on: the spec's, else its scene's ``run.n_procs``."""
+    if spec.n_procs is not None:
+        return spec.n_procs
+    if spec.scene is None:
+        return load_scene_file(Path(spec.case_dir) / SCENE_FILE).run.n_procs
+    return load_scene(spec.scene, list(spec.overrides)).run.n_procs
+
+
 def run_many(
     specs: list[CaseSpec],
     budget: Budget | None = None,
@@ -806,10 +842,13 @@ if __name__ == "__main__":  # pragma: no cover - the worker entry point
 
 
 __all__ = [
+    "Backend",
     "Budget",
+    "LocalBackend",
     "CaseSpec",
     "Outcome",
     "RunSummary",
+    "case_ranks",
     "error_payload",
     "grid_study",
     "prepare",

@@ -16,9 +16,19 @@ A sweep file (TOML) names a base scene and the variations::
 
     [[cases]]                       # ... or (and) an explicit list of overrides
     "silo.orifice_width" = 0.035
+    "run.n_procs" = 2               # a case's own MPI ranks (else ranks_per_case)
 
-Each case runs through :func:`foamsilo.pipeline.run_many` (its own worker
-process, resumable): a finished case is only reduced again, an interrupted
+    [slurm]                         # for --backend slurm (the command line's options win)
+    partition = "compute"
+    account = "silo-project"
+    time_limit = "02:00:00"         # per job, Slurm's format
+    sbatch = ["--qos=normal"]       # further #SBATCH lines
+
+Each case runs through a :class:`~foamsilo.pipeline.Backend`: on this
+machine (:func:`foamsilo.pipeline.run_many`, each case in its own worker
+process under the CPU budget) or on a Slurm cluster
+(:class:`foamsilo.slurm.SlurmBackend`, each case a batch job running the same
+worker). Either way a case is resumable: a finished case is only reduced again, an interrupted
 one continues from its latest complete time directory, a fresh one is
 created, a running one is left alone (and reported). Every scene is
 validated before anything runs. The summary table (``summary.csv``,
@@ -33,7 +43,7 @@ import io
 import itertools
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -41,9 +51,10 @@ from foamsilo.case import write_whole
 from foamsilo.compare import COMPARE_MD, compare
 from foamsilo.errors import FoamsiloError, SceneError
 from foamsilo.jsonio import dumps
-from foamsilo.pipeline import Budget, CaseSpec, Outcome, run_many
+from foamsilo.pipeline import Backend, Budget, CaseSpec, LocalBackend, Outcome
 from foamsilo.report import sweep_report
 from foamsilo.scene import format_override, load_scene, read_toml
+from foamsilo.slurm import SlurmOptions
 
 #: Reduced outputs copied from each case's summary into the table
 OUTPUT_KEYS = (
@@ -58,7 +69,9 @@ OUTPUT_KEYS = (
     "flux_vs_volume_rel_diff",
     "mass_balance_rel_error",
 )
-_SWEEP_KEYS = {"base", "name", "output", "ranks_per_case", "cpu_budget", "set", "grid", "cases"}
+_SWEEP_KEYS = {
+    "base", "name", "output", "ranks_per_case", "cpu_budget", "set", "grid", "cases", "slurm"
+}  # fmt: skip
 
 
 @dataclass
@@ -86,6 +99,7 @@ class Sweep:
     ranks_per_case: int
     cpu_budget: int
     cases: list[SweepCase]
+    slurm: SlurmOptions = field(default_factory=SlurmOptions)
 
     @property
     def budget(self) -> Budget:
@@ -156,7 +170,11 @@ def load_sweep(path: Path) -> Sweep:
         except SceneError as exc:
             raise SceneError(f"cases[{i}].{exc.field}", str(exc)) from None
         cases.append(case)
-    return Sweep(path, base, name, output, ranks, budget, cases)
+    slurm = data.get("slurm", {})
+    if not isinstance(slurm, dict):
+        raise SceneError("sweep.slurm", "must be a table of sbatch options")
+    options = SlurmOptions.from_table(slurm, "sweep.slurm")
+    return Sweep(path, base, name, output, ranks, budget, cases, options)
 
 
 def _spec(sweep: Sweep, case: SweepCase) -> CaseSpec:
@@ -165,7 +183,8 @@ def _spec(sweep: Sweep, case: SweepCase) -> CaseSpec:
         case_dir=case.directory,
         scene=sweep.base,
         overrides=tuple(case.sets),
-        n_procs=sweep.ranks_per_case,
+        # a case's own run.n_procs wins over the sweep's ranks_per_case
+        n_procs=None if "run.n_procs" in case.overrides else sweep.ranks_per_case,
         resume=True,
         update=True,
         label=case.directory.name,
@@ -206,16 +225,26 @@ def write_summary(sweep: Sweep, rows: list[dict[str, Any]]) -> None:
     write_whole(sweep.output / "summary.csv", buf.getvalue())
 
 
-def run_sweep(sweep: Sweep, log: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
-    """Run every case of ``sweep`` under its CPU budget; return the summary rows."""
+def run_sweep(
+    sweep: Sweep, log: Callable[[str], None] | None = None, backend: Backend | None = None
+) -> list[dict[str, Any]]:
+    """Run every case of ``sweep``; return the summary rows.
+
+    ``backend``: where the cases run (default: this machine, under the
+    sweep's CPU budget; :class:`foamsilo.slurm.SlurmBackend` for a cluster).
+    """
     say = log or (lambda m: None)
     sweep.output.mkdir(parents=True, exist_ok=True)
     results: dict[int, Outcome | None] = {c.index: None for c in sweep.cases}
-    budget = sweep.budget
-    say(
-        f"sweep {sweep.name}: {len(sweep.cases)} cases, {budget.cases_at_once} at once x "
-        f"{sweep.ranks_per_case} rank(s) (budget {sweep.cpu_budget} cores)"
-    )
+    if backend is None:
+        budget = sweep.budget
+        backend = LocalBackend(budget)
+        say(
+            f"sweep {sweep.name}: {len(sweep.cases)} cases, {budget.cases_at_once} at once x "
+            f"{sweep.ranks_per_case} rank(s) (budget {sweep.cpu_budget} cores)"
+        )
+    else:
+        say(f"sweep {sweep.name}: {len(sweep.cases)} cases on {type(backend).__name__}")
     write_summary(sweep, [_row(c, None) for c in sweep.cases])  # all pending
     by_dir = {c.directory: c for c in sweep.cases}
 
@@ -227,7 +256,7 @@ def run_sweep(sweep: Sweep, log: Callable[[str], None] | None = None) -> list[di
         say(f"case {case.index} ({case.directory.name}): {rows[case.index]['status']}")
 
     try:
-        run_many([_spec(sweep, c) for c in sweep.cases], budget, on_done=done)
+        backend.run([_spec(sweep, c) for c in sweep.cases], on_done=done)
     finally:
         write_summary(sweep, [_row(c, results[c.index]) for c in sweep.cases])
     rows = [_row(c, results[c.index]) for c in sweep.cases]

@@ -63,3 +63,30 @@ def frozen_flow_step(case: Path, dt: float, steps: int = 1) -> None:
 
 def repo_root() -> Path:
     return Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="session")
+def slurm(tmp_path_factory):
+    """A one-node Slurm on localhost (munged, slurmctld, slurmd), stopped by PID after the tests.
+
+    A missing Slurm fails the test with the install command; the clients
+    (and the foamsilo commands the tests run) reach it through ``SLURM_CONF``.
+    """
+    import os
+
+    from .slurm_cluster import INSTALL, LocalSlurm, missing_programs
+
+    missing = missing_programs()
+    if missing:
+        pytest.fail(f"Slurm is not installed (no {', '.join(missing)}): {INSTALL} "
+                    "(scripts/setup.sh installs it)")  # fmt: skip
+    cluster = LocalSlurm(tmp_path_factory.mktemp("slurm"), os.cpu_count() or 1)
+    cluster.start()
+    mp = pytest.MonkeyPatch()
+    mp.setenv("SLURM_CONF", str(cluster.conf))
+    mp.setenv("PATH", cluster.env["PATH"])
+    try:
+        yield cluster
+    finally:
+        mp.undo()
+        cluster.stop()

@@ -35,6 +35,7 @@ LAYERS: list[set[str]] = [
     {"summary"},
     {"report"},
     {"pipeline"},
+    {"slurm"},
     {"sweep", "studies"},
     {"cli", "__main__"},
 ]

@@ -20,10 +20,24 @@ from typing import Any
 
 import numpy as np
 
-from foamsilo.pipeline import Budget, CaseSpec, Outcome, run_many
+from foamsilo.pipeline import Backend, Budget, CaseSpec, LocalBackend, Outcome
 from foamsilo.post.steady import STEP_SWING_WARNING
 from foamsilo.run import STEP_TABLE
 from foamsilo.scene import format_override, load_preset, read_toml
+
+#: Where a study's cases run: cases at a time on this machine, or a backend
+#: (:class:`foamsilo.slurm.SlurmBackend`)
+Jobs = int | Backend
+
+
+def backend_of(jobs: Jobs) -> Backend:
+    """Return the backend of ``jobs``: ``jobs`` cases at a time here, or the backend given."""
+    return LocalBackend(Budget(cores=jobs)) if isinstance(jobs, int) else jobs
+
+
+def jobs_words(jobs: Jobs) -> str:
+    """Return how a study's cases ran, in words, for its report."""
+    return f"{jobs} cases at a time" if isinstance(jobs, int) else f"on {type(jobs).__name__}"
 
 
 def study_table(name: str) -> dict[str, Any]:
@@ -160,11 +174,11 @@ def record_fields(case_dir: Path) -> dict[str, Any]:
 def run_rows(
     cases: list[StudyCase],
     work: Path,
-    jobs: int,
+    jobs: Jobs,
     limit: float | None,
     on_row: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
-    """Run the cases (``jobs`` at a time, in ``work/NN``); one outcome row each, in order."""
+    """Run the cases (``jobs`` at a time, or on a backend) in ``work/NN``; a row each, in order."""
     specs = [c.spec(Path(work) / f"{i:02d}", limit) for i, c in enumerate(cases)]
     Path(work).mkdir(parents=True, exist_ok=True)  # made once, not by racing workers
     by_dir = {s.case_dir: c for s, c in zip(specs, cases, strict=True)}
@@ -173,7 +187,7 @@ def run_rows(
         if on_row is not None:
             on_row(outcome_row(by_dir[o.spec.case_dir], o))
 
-    outcomes = run_many(specs, Budget(cores=jobs), on_done=done)
+    outcomes = backend_of(jobs).run(specs, on_done=done)
     return [outcome_row(c, o) for c, o in zip(cases, outcomes, strict=True)]
 
 

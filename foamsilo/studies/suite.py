@@ -52,9 +52,11 @@ from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.jsonio import dumps
 from foamsilo.studies.cases import (
+    Jobs,
     StudyCase,
     fmt,
     git_commit,
+    jobs_words,
     machine_info,
     overrides,
     pick,
@@ -119,7 +121,7 @@ def work_precision_series() -> list[str]:
 def work_precision(
     quick: bool,
     work: Path,
-    jobs: int,
+    jobs: Jobs,
     limit: float,
     on_row: OnRow = None,
     series: str | None = None,
@@ -208,7 +210,7 @@ def beverloo_fit(d: np.ndarray, w: np.ndarray, exponent: float) -> dict[str, flo
 
 
 def beverloo(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
     """Venier Test 1 outlets (axisymmetric) and the planar silo against the orifice width."""
     from foamsilo.scene import load_preset
@@ -236,7 +238,7 @@ def beverloo(
 
 # ---------------------------------------------------------- gas-assisted lab
 def gas_lab(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
     """Zhou's cylindrical lab silo with air injected at the top, against eqs. 17 and 23.
 
@@ -306,7 +308,7 @@ def derive_gas_lab(data: dict[str, Any]) -> None:
 
 # ------------------------------------------------------------------ extremes
 def extremes(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
     """Stiff and extreme scenes: run to the end or stop with a diagnosis."""
     table = [e for e in study_table("suite")["extremes"] if e.get("quick") or not quick]
@@ -323,7 +325,7 @@ def extremes(
 
 # ----------------------------------------------------------- cap independence
 def cap_independence(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
     """Each scene at the lowest and the highest viscosity cap of ``suite.toml`` [cap]."""
     table = study_table("suite")["cap"]
@@ -347,7 +349,7 @@ def cap_independence(
 
 # ------------------------------------------------------------------ time step
 def time_step_independence(
-    quick: bool, work: Path, jobs: int, limit: float, on_row: OnRow = None
+    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
 ) -> dict[str, Any]:
     """Each scene at a fixed mesh and several Courant limits (``suite.toml`` [time-step]).
 
@@ -396,7 +398,7 @@ def derive_time_step(data: dict[str, Any]) -> None:
 def presets(
     quick: bool,
     work: Path,
-    jobs: int,
+    jobs: Jobs,
     limit: float,
     on_row: OnRow = None,
     only: str | None = None,
@@ -517,7 +519,7 @@ def run_suite(
     out_dir: Path,
     work_dir: Path,
     only: list[str] | None = None,
-    jobs: int = 2,
+    jobs: Jobs = 2,
     limit: float = 900.0,
     on_row: OnRow = None,
 ) -> dict[str, Any]:
@@ -552,7 +554,7 @@ def run_suite(
         result.pop("checks", None)
     commits = result.get("commits") or {k: result.get("commit") for k in ENTRIES if k in result}
     timing = result.get("wall_s", {})
-    result.update({"quick": quick, "machine": machine_info(), "jobs": jobs})
+    result.update({"quick": quick, "machine": machine_info(), "jobs": jobs_words(jobs)})
     for name, sub in split:
         t0 = time.perf_counter()
         if sub and name == "presets":
@@ -723,6 +725,11 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
     return " ".join(parts)
 
 
+def _jobs(value: Any) -> str:
+    # older reports hold the number of cases at a time
+    return f"{value} cases at a time" if isinstance(value, int) else str(value)
+
+
 def suite_markdown(result: dict[str, Any], stem: str) -> str:
     """Return the suite's report (Markdown)."""
     m = result["machine"]
@@ -730,7 +737,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
     lines = [
         f"# Validation suite{' (quick)' if result['quick'] else ''}",
         "",
-        f"`{cmd}` on {m['cpu']}, {m['cores']} cores, {result['jobs']} cases at a time; "
+        f"`{cmd}` on {m['cpu']}, {m['cores']} cores, {_jobs(result['jobs'])}; "
         f"commit {result['commit']}. Wall time per entry: "
         + ", ".join(f"{k} {v / 60:.1f} min" for k, v in result["wall_s"].items())
         + ".",
