@@ -43,7 +43,16 @@ DEFAULT_RUNS_DIR = Path("runs")
 def _console(stderr: bool = False) -> Any:
     from rich.console import Console
 
+    if stderr:
+        # one console for messages and progress bars: a message printed while
+        # a bar is live goes above it (the console finds sys.stderr per write)
+        if not _STDERR:
+            _STDERR.append(Console(stderr=True, highlight=False))
+        return _STDERR[0]
     return Console(stderr=stderr, highlight=False)
+
+
+_STDERR: list[Any] = []
 
 
 #: Where --json output goes: the stdout of the call; everything else printed
@@ -481,11 +490,18 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from foamsilo.sweep import load_sweep, run_sweep
 
     sweep = load_sweep(Path(args.sweep))
-    backend = None
+    backend: Any = None
     if args.backend == "slurm":
         from foamsilo.slurm import SlurmBackend
 
         backend = SlurmBackend(_slurm_options(args, sweep.slurm), say=_say(args))
+    elif sys.stderr.isatty():
+        from foamsilo.pipeline import LocalBackend
+
+        _say(args)(f"up to {sweep.cases_at_once} cases at once (CPU budget {sweep.cpu_budget})")
+        backend = LocalBackend(sweep.budget)
+    if backend is not None:
+        backend = _cases_progress(args, backend)
     rows = run_sweep(sweep, log=_say(args), backend=backend)
     failed = [r for r in rows if r["status"] != "ok"]
 
@@ -559,6 +575,113 @@ def cmd_analytic(args: argparse.Namespace) -> int:
     return 0
 
 
+class _CasesProgress:
+    """A backend shown on a terminal: cases done / total, the running ones' time, an ETA.
+
+    Wraps the backend the cases run on (this machine's or Slurm's); a thread
+    reads each unfinished case's solver log (its latest ``Time =``) every
+    second. The bar's fill counts the running cases' fractions, so that the
+    ETA moves with the simulated time, not only when a case ends.
+    """
+
+    def __init__(self, inner: Any, console: Any) -> None:
+        self.inner = inner
+        self.console = console
+
+    def run(self, specs: list[Any], on_done: Callable[[Any], None] | None = None) -> list[Any]:
+        import threading
+
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        from foamsilo.case import SCENE_FILE, is_case
+        from foamsilo.run import log_time
+        from foamsilo.scene import load_scene, load_scene_file
+
+        def end_time(spec: Any) -> float:
+            if spec.scene is None:
+                return float(load_scene_file(Path(spec.case_dir) / SCENE_FILE).run.end_time)
+            return float(load_scene(spec.scene, list(spec.overrides)).run.end_time)
+
+        ends = [end_time(s) for s in specs]
+        finished: set[int] = set()
+        by_dir = {Path(s.case_dir): i for i, s in enumerate(specs)}
+        where = Path(specs[0].case_dir).parent.name if specs else ""
+        prog = Progress(
+            TextColumn(f"[bold]{where}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("cases"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            TextColumn("{task.fields[running]}"),
+            console=self.console,
+            transient=True,
+        )
+        task = prog.add_task(where, total=len(specs), running="")
+        stop = threading.Event()
+
+        def refresh() -> None:
+            parts, fraction = [], 0.0
+            for i, s in enumerate(specs):
+                d = Path(s.case_dir)
+                if i in finished or not d.is_dir() or not is_case(d):
+                    continue
+                t = log_time(d)
+                if t is None:
+                    continue
+                fraction += min(t / ends[i], 1.0) if ends[i] > 0 else 0.0
+                parts.append(f"{t:.3g}/{ends[i]:.3g} s")
+            running = f"running: {', '.join(parts[:4])}" + (" ..." if len(parts) > 4 else "")
+            prog.update(task, completed=len(finished) + fraction,
+                        running=running if parts else "")  # fmt: skip
+
+        def poll() -> None:
+            while not stop.wait(1.0):
+                refresh()
+
+        def done(o: Any) -> None:
+            finished.add(by_dir[Path(o.spec.case_dir)])
+            refresh()
+            if on_done is not None:
+                on_done(o)
+
+        watcher = threading.Thread(target=poll, daemon=True)
+        with prog:
+            watcher.start()
+            try:
+                return list(self.inner.run(specs, on_done=done))
+            finally:
+                stop.set()
+                watcher.join()
+
+
+def _cases_progress(args: argparse.Namespace, jobs: Any) -> Any:
+    """Return ``jobs`` (cases at a time, or a backend) shown as a progress bar on a terminal.
+
+    Under ``--json`` or ``--quiet``, or off a terminal, ``jobs`` itself: the
+    commands then print one line per finished case (or nothing).
+    """
+    if getattr(args, "json", False) or getattr(args, "quiet", False) or not sys.stderr.isatty():
+        return jobs
+    from foamsilo.studies.cases import backend_of
+
+    return _CasesProgress(backend_of(jobs), _console(stderr=True))
+
+
+def _progress_backend(args: argparse.Namespace, jobs: int) -> Any:
+    """Return the progress display of ``jobs`` cases at a time on a terminal, else None."""
+    shown = _cases_progress(args, jobs)
+    return None if isinstance(shown, int) else shown
+
+
 def _row_printer(args: argparse.Namespace) -> Callable[[dict[str, Any]], None]:
     say = _say(args)
 
@@ -589,7 +712,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
     with _work_dir(args, "foamsilo-validate-") as work:
         if args.suite == "gas-extremes":
             report = gas_extremes(
-                args.cells, work, Path(args.output), jobs=args.jobs, limit=args.time_limit
+                args.cells,
+                work,
+                Path(args.output),
+                jobs=args.jobs,
+                limit=args.time_limit,
+                backend=_progress_backend(args, args.jobs),
             )
             _emit(
                 args,
@@ -600,7 +728,12 @@ def cmd_validate(args: argparse.Namespace) -> int:
             )
             return 0
         report = zhou_gas(
-            args.cells, work, Path(args.output), jobs=args.jobs, end_time=args.end_time
+            args.cells,
+            work,
+            Path(args.output),
+            jobs=args.jobs,
+            end_time=args.end_time,
+            backend=_progress_backend(args, args.jobs),
         )
 
     def human() -> None:
@@ -657,7 +790,7 @@ def cmd_bench_validation(args: argparse.Namespace) -> int:
                 Path(args.output),
                 work,
                 args.only or None,
-                jobs=jobs,
+                jobs=_cases_progress(args, jobs),
                 limit=args.time_limit,
                 on_row=_row_printer(args),
             )

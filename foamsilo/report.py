@@ -174,6 +174,8 @@ def case_report(summary: RunSummary) -> Path:
             f"downward speed {_fmt(f['profile_max_downward_m_s'], '.3g')} m/s, mass flow "
             f"through the line {_fmt(f['profile_mass_flow'], '.5g')} {units}.",
             "",
+            "![where the flow is: the silo and the orifice region](orifice.png)",
+            "",
             "![mid-plane fields](fields.png)",
             "",
             "![velocity profile](profile_U.png) ![free surface](free_surface.png)",

@@ -244,7 +244,7 @@ def run_sweep(
             f"{sweep.ranks_per_case} rank(s) (budget {sweep.cpu_budget} cores)"
         )
     else:
-        say(f"sweep {sweep.name}: {len(sweep.cases)} cases on {type(backend).__name__}")
+        say(f"sweep {sweep.name}: {len(sweep.cases)} cases")
     write_summary(sweep, [_row(c, None) for c in sweep.cases])  # all pending
     by_dir = {c.directory: c for c in sweep.cases}
 

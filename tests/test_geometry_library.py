@@ -320,6 +320,8 @@ def test_axisymmetric_and_3d_dry_runs_give_the_same_rate(tmp_path, capsys, openf
         # the human summary of a non-planar case (scaled by rho sqrt(g) D^2.5)
         assert main(["post", str(tmp_path / rep)]) == 0
         assert "D^(5/2)" in capsys.readouterr().out
+        # where the flow is: the silo and the orifice region (3D: and a section)
+        assert (tmp_path / rep / "orifice.png").stat().st_size > 10_000
     assert rates["3d"] == pytest.approx(rates["axisymmetric"], rel=0.05)
     # the wedge is the cheap one (measured ratio ~40)
     assert cpu["3d"] > 5 * cpu["axisymmetric"]

@@ -81,12 +81,15 @@ def test_velocity_profile_at_015_h(posted):
 
 def test_pictures_and_report(posted):
     case, s = posted
-    for name in ("discharge.png", "fields.png", "profile_U.png", "free_surface.png"):
+    for name in ("discharge.png", "fields.png", "orifice.png", "profile_U.png", "free_surface.png"):
         assert (case / name).stat().st_size > 10_000, name
     report = (case / "report.md").read_text()
     assert f"{s['Q']:.5g}" in report
-    for name in ("discharge.png", "fields.png", "profile_U.png", "free_surface.png"):
+    for name in ("discharge.png", "fields.png", "orifice.png", "profile_U.png", "free_surface.png"):
         assert f"]({name})" in report
+    # the orifice region's picture is centred on the slot, mid-floor
+    f = CaseFields(case)
+    assert f.orifice_centre((0.0, 0.1, 0.0, 0.4)) == (pytest.approx(0.05), 0.0)
     assert "| 2D Beverloo, C = 1.28 |" in report  # the comparison table
 
 

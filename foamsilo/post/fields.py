@@ -30,6 +30,8 @@ from foamsilo.scene import Scene, load_scene_file
 
 #: Cells whose granular viscosity is within this fraction of the cap are stagnant
 CAP_FRACTION = 0.99
+#: Grains slower than this fraction of the fastest are drawn as the stagnant zone
+STAGNANT_SPEED = 0.02
 #: Volume fraction that marks the free surface
 SURFACE_ALPHA = 0.5
 ALPHA = "alpha.granular"
@@ -338,6 +340,136 @@ class CaseFields:
         plt.close(fig)
         return path
 
+    def orifice_centre(self, bounds: tuple[float, ...]) -> tuple[float, float]:
+        """Return the orifice's centre in the mid-plane (x or r, y) [m], given its bounds."""
+        s = self.scene.silo
+        if s.orifice_position == "lateral":
+            assert s.orifice_height is not None
+            return float(bounds[1]), s.orifice_height + s.orifice_width / 2
+        if self.scene.representation == "axisymmetric":
+            return 0.0, 0.0
+        if self.scene.representation == "planar" or s.shape == "rectangular":
+            return float(bounds[0] + bounds[1]) / 2, 0.0
+        return s.eccentricity, 0.0
+
+    def orifice_picture(self, time: float, path: Path) -> Path:
+        """Where the flow is: the whole silo and the orifice region, grain speed (PNG).
+
+        Left, the mid-plane of the whole silo; beside it the region within
+        three orifice widths of the orifice, with velocity arrows; on both the
+        stagnant zone outlined (white: grains slower than ``STAGNANT_SPEED`` of
+        the fastest) and the free surface (alpha = 1/2, cyan). A 3D case adds the horizontal
+        section half an orifice width above the orifice's lower edge. Equal
+        aspect ratio throughout; off-screen (matplotlib's Agg).
+        """
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        from matplotlib.collections import PolyCollection
+        from matplotlib.tri import Triangulation
+        from scipy.interpolate import griddata
+
+        g = self.mesh(time, (ALPHA, "U", "nu1"))
+        sc = self.scene
+        z0 = float(g.bounds[4] + g.bounds[5]) / 2 if sc.representation == "planar" else 0.0
+        plane = g.slice(normal="z", origin=(0.0, 0.0, z0))
+        if plane.n_cells == 0:
+            raise FoamsiloError(f"{self.case}: the mid-plane z = {z0:g} m cuts no cell")
+        polys = [np.asarray(plane.get_cell(i).points)[:, :2] for i in range(plane.n_cells)]
+        centres = np.asarray(plane.cell_centers().points)[:, :2]
+        alpha = np.asarray(plane.cell_data[ALPHA])
+        u = np.asarray(plane.cell_data["U"])
+        grains = alpha >= SURFACE_ALPHA
+        speed = np.where(grains, np.linalg.norm(u, axis=1), np.nan)
+        # stagnant: grains slower than a small fraction of the fastest (a plug
+        # moving as a rigid block sits at the viscosity cap too, but moves)
+        fastest = float(np.nanmax(speed)) if np.isfinite(speed).any() else 0.0
+        stagnant = grains & (np.nan_to_num(speed) <= STAGNANT_SPEED * fastest)
+        bounds = tuple(float(b) for b in plane.bounds)
+        xc, yc = self.orifice_centre(bounds)
+        D = sc.silo.orifice_width
+        if sc.silo.orifice_position == "lateral":
+            win = (max(bounds[0], xc - 5 * D), xc, max(bounds[2], yc - 3 * D),
+                   min(bounds[3], yc + 3 * D))  # fmt: skip
+        else:
+            win = (max(bounds[0], xc - 3 * D), min(bounds[1], xc + 3 * D), bounds[2],
+                   min(bounds[3], bounds[2] + 4 * D))  # fmt: skip
+        tri = Triangulation(centres[:, 0], centres[:, 1])
+        vmax = fastest if fastest > 0 else 1.0
+        cmap = matplotlib.colormaps["magma"].with_extremes(bad="0.85")
+
+        def speed_panel(ax: Any, box: tuple[float, ...], title: str) -> Any:
+            coll = PolyCollection(polys, array=np.ma.masked_invalid(speed), cmap=cmap,
+                                  edgecolors="none", clim=(0.0, vmax))  # fmt: skip
+            ax.add_collection(coll)
+            if stagnant.any() and not stagnant.all():
+                ax.tricontour(tri, stagnant.astype(float), levels=[0.5], colors="white",
+                              linewidths=1.0)  # fmt: skip
+            ax.tricontour(tri, alpha, levels=[SURFACE_ALPHA], colors="cyan", linewidths=1.0)
+            ax.set_xlim(box[0], box[1])
+            ax.set_ylim(box[2], box[3])
+            ax.set_aspect("equal")
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("r [m]" if sc.representation == "axisymmetric" else "x [m]", fontsize=8)
+            ax.tick_params(labelsize=7)
+            return coll
+
+        section = None
+        if sc.representation == "3d":
+            ys = (sc.silo.orifice_height or 0.0) + D / 2 if sc.silo.orifice_position == "lateral" \
+                else 0.5 * D  # fmt: skip
+            cut = self.mesh(time, (ALPHA, "U", "nu1")).slice(normal="y", origin=(0.0, ys, 0.0))
+            if cut.n_cells:
+                section = (cut, ys)
+        # widths in proportion to what each panel shows, at one height
+        whole_w = (bounds[1] - bounds[0]) / max(bounds[3] - bounds[2], 1e-12)
+        zoom_w = (win[1] - win[0]) / max(win[3] - win[2], 1e-12)
+        ratios = [max(whole_w, 0.25), max(zoom_w, 0.25)] + ([1.0] if section else [])
+        fig_h = 5.5
+        size = (fig_h * sum(ratios) + 2.5, fig_h + 0.7)
+        fig, axes = plt.subplots(1, len(ratios), figsize=size, constrained_layout=True,
+                                 gridspec_kw={"width_ratios": ratios})  # fmt: skip
+        speed_panel(axes[0], bounds, "whole silo (mid-plane)")
+        coll = speed_panel(axes[1], win, f"orifice region (D = {D * 1e3:g} mm)")
+        axes[1].add_patch(matplotlib.patches.Rectangle((win[0], win[2]), win[1] - win[0],
+                          win[3] - win[2], fill=False, ec="0.4", lw=0.6))  # fmt: skip
+        axes[0].add_patch(matplotlib.patches.Rectangle((win[0], win[2]), win[1] - win[0],
+                          win[3] - win[2], fill=False, ec="tab:blue", lw=1.0))  # fmt: skip
+        gx, gy = np.meshgrid(np.linspace(win[0], win[1], 18), np.linspace(win[2], win[3], 18))
+        inside = (centres[:, 0] >= win[0] - D) & (centres[:, 0] <= win[1] + D) & \
+                 (centres[:, 1] <= win[3] + D)  # fmt: skip
+        if inside.sum() >= 4:
+            pts = centres[inside]
+            gu = griddata(pts, np.where(grains, u[:, 0], np.nan)[inside], (gx, gy))
+            gv = griddata(pts, np.where(grains, u[:, 1], np.nan)[inside], (gx, gy))
+            axes[1].quiver(gx, gy, gu, gv, color="tab:green", angles="xy", width=0.004)
+        axes[0].set_ylabel("y [m]", fontsize=8)
+        if section is not None:
+            cut, ys = section
+            cpolys = [np.asarray(cut.get_cell(i).points)[:, [0, 2]] for i in range(cut.n_cells)]
+            ca = np.asarray(cut.cell_data[ALPHA])
+            cs = np.where(ca >= SURFACE_ALPHA, np.linalg.norm(cut.cell_data["U"], axis=1), np.nan)
+            ax = axes[2]
+            ax.add_collection(PolyCollection(cpolys, array=np.ma.masked_invalid(cs), cmap=cmap,
+                                             edgecolors="none", clim=(0.0, vmax)))  # fmt: skip
+            b = cut.bounds
+            ax.set_xlim(b[0], b[1])
+            ax.set_ylim(b[4], b[5])
+            ax.set_aspect("equal")
+            ax.set_title(f"section y = {ys * 1e3:.3g} mm", fontsize=9)
+            ax.set_xlabel("x [m]", fontsize=8)
+            ax.set_ylabel("z [m]", fontsize=8)
+            ax.tick_params(labelsize=7)
+        fig.colorbar(coll, ax=axes, shrink=0.8, label="grain speed |U| [m/s]")
+        fig.suptitle(f"{sc.name}, t = {time:g} s: grain speed; white: stagnant zone (slower "
+                     f"than {STAGNANT_SPEED:.0%} of the fastest), cyan: free surface",
+                     fontsize=10)  # fmt: skip
+        path = Path(path)
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return path
+
 
 #: Height of the velocity profile, as a fraction of the silo height (Venier Fig. 3)
 PROFILE_HEIGHT = 0.15
@@ -346,6 +478,7 @@ PROFILE_PNG = "profile_U.png"
 SURFACE_CSV = "free_surface.csv"
 SURFACE_PNG = "free_surface.png"
 FIELDS_PNG = "fields.png"
+ORIFICE_PNG = "orifice.png"
 
 
 def _write_csv(path: Path, header: list[str], rows: list[list[float]]) -> None:
@@ -447,9 +580,10 @@ def field_summary(case: Path, case_type: str = "auto") -> FieldSummary:
 
     At the latest written time: the free surface (axis, wall, mean), the
     stagnant fraction, the velocity profile at 0.15 H (``profile_U.csv``,
-    ``profile_U.png``) with the mass flow through it, and the mid-plane
-    picture (``fields.png``); over every written time, the free surface
-    (``free_surface.csv``, ``free_surface.png``).
+    ``profile_U.png``) with the mass flow through it, the mid-plane
+    picture (``fields.png``) and the orifice region's (``orifice.png``);
+    over every written time, the free surface (``free_surface.csv``,
+    ``free_surface.png``).
     """
     f = CaseFields(case, case_type)
     later = [t for t in f.times if t > 0]
@@ -474,6 +608,7 @@ def field_summary(case: Path, case_type: str = "auto") -> FieldSummary:
     _write_csv(f.case / SURFACE_CSV, ["t_s", "axis_m", "wall_m", "mean_m"], series)
     plot_free_surface(np.array(series), f.scene, f.case / SURFACE_PNG)
     f.picture(t, f.case / FIELDS_PNG)
+    f.orifice_picture(t, f.case / ORIFICE_PNG)
     grains = prof["alpha"] >= SURFACE_ALPHA
     return FieldSummary(
         time_s=t,
@@ -485,5 +620,5 @@ def field_summary(case: Path, case_type: str = "auto") -> FieldSummary:
         profile_max_downward_m_s=float(-np.min(prof["u_vertical"][grains]))
         if grains.any()
         else None,
-        files=[PROFILE_CSV, PROFILE_PNG, SURFACE_CSV, SURFACE_PNG, FIELDS_PNG],
+        files=[PROFILE_CSV, PROFILE_PNG, SURFACE_CSV, SURFACE_PNG, FIELDS_PNG, ORIFICE_PNG],
     )

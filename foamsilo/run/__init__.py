@@ -1,6 +1,6 @@
 """Running siloFoam on a case: the runner (serial or MPI, through PyFoam) and its log monitor."""
 
-from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor, Step
+from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor, Step, log_time
 from foamsilo.run.runner import (
     ProgressCallback,
     RunResult,
@@ -21,6 +21,7 @@ __all__ = [
     "RunResult",
     "StepRelease",
     "Step",
+    "log_time",
     "modifiable_while_running",
     "mpi_environment",
     "outer_iterations",

@@ -54,6 +54,26 @@ _RE_ALPHA = re.compile(
 )
 
 
+def log_time(case: Path) -> float | None:
+    """Return the latest simulated time in a case's solver log (None: no step logged yet).
+
+    Reads the log's tail only: what a progress display asks of a running case.
+    """
+    try:
+        with open(Path(case) / LOG_NAME, "rb") as fh:
+            fh.seek(0, 2)
+            fh.seek(max(0, fh.tell() - 16384))
+            tail = fh.read().decode("utf-8", "replace")
+    except OSError:
+        return None
+    for line in reversed(tail.splitlines()):
+        m = _RE_TIME.match(line.strip())
+        if m:
+            t = float(m.group(1))
+            return t if math.isfinite(t) else None
+    return None
+
+
 def _isbad(x: float) -> bool:
     return not math.isfinite(x)
 

@@ -37,7 +37,10 @@ def backend_of(jobs: Jobs) -> Backend:
 
 def jobs_words(jobs: Jobs) -> str:
     """Return how a study's cases ran, in words, for its report."""
-    return f"{jobs} cases at a time" if isinstance(jobs, int) else f"on {type(jobs).__name__}"
+    inner: Any = getattr(jobs, "inner", jobs)  # the backend under a progress display
+    if isinstance(inner, LocalBackend):
+        inner = inner.budget.cases_at_once
+    return f"{inner} cases at a time" if isinstance(inner, int) else f"on {type(inner).__name__}"
 
 
 def study_table(name: str) -> dict[str, Any]:

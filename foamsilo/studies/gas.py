@@ -24,6 +24,7 @@ from foamsilo.analytic.zhou import reduced_flow_rate
 from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.jsonio import dumps
+from foamsilo.pipeline import Backend
 from foamsilo.studies.cases import (
     StudyCase,
     fmt,
@@ -48,7 +49,12 @@ def eq23_planar(
 
 
 def zhou_gas(
-    cells: int, work_dir: Path, out_dir: Path, jobs: int = 2, end_time: float | None = None
+    cells: int,
+    work_dir: Path,
+    out_dir: Path,
+    jobs: int = 2,
+    end_time: float | None = None,
+    backend: Backend | None = None,
 ) -> dict[str, Any]:
     """Run the sweep of Zhou sec. III.B and write figures and a report."""
     from foamsilo.scene import load_preset
@@ -61,7 +67,7 @@ def zhou_gas(
         sets = overrides(table["closed_top"]) if q == 0 else [f"gas.q_air_scaled={q!r}"]
         cases.append(StudyCase(f"Q_air = {q:g}", preset, base + sets))
     t0 = time.perf_counter()
-    rows = run_rows(cases, Path(work_dir), jobs, None)
+    rows = run_rows(cases, Path(work_dir), backend or jobs, None)
     wall = time.perf_counter() - t0
     failed = [r for r in rows if r["outcome"] != "steady"]
     if failed:
@@ -327,7 +333,12 @@ top) flow.
 
 
 def gas_extremes(
-    cells: int, work_dir: Path, out_dir: Path, jobs: int = 2, limit: float = 900.0
+    cells: int,
+    work_dir: Path,
+    out_dir: Path,
+    jobs: int = 2,
+    limit: float = 900.0,
+    backend: Backend | None = None,
 ) -> dict[str, Any]:
     """Stiff and extreme gas cases in the rectangular lab silo; report each outcome."""
     from foamsilo.scene import load_preset
@@ -338,7 +349,7 @@ def gas_extremes(
         StudyCase(c["label"], table["preset"], base + overrides(c["set"])) for c in table["cases"]
     ]
     t0 = time.perf_counter()
-    rows = run_rows(cases, Path(work_dir), jobs, limit)
+    rows = run_rows(cases, Path(work_dir), backend or jobs, limit)
     for r in rows:
         if (
             r.get("fill_height_end_m") is not None
