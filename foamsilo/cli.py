@@ -709,16 +709,11 @@ def cmd_validate(args: argparse.Namespace) -> int:
     """Reproduce a seed paper's simulations and write the report into docs/."""
     from foamsilo.studies.gas import gas_extremes, zhou_gas
 
+    runs = {"jobs": args.jobs, "backend": _progress_backend(args, args.jobs)}
     with _work_dir(args, "foamsilo-validate-") as work:
+        where = (args.cells, work, Path(args.output))
         if args.suite == "gas-extremes":
-            report = gas_extremes(
-                args.cells,
-                work,
-                Path(args.output),
-                jobs=args.jobs,
-                limit=args.time_limit,
-                backend=_progress_backend(args, args.jobs),
-            )
+            report = gas_extremes(*where, limit=args.time_limit, **runs)
             _emit(
                 args,
                 {"ok": True, **report},
@@ -727,14 +722,7 @@ def cmd_validate(args: argparse.Namespace) -> int:
                 ),
             )
             return 0
-        report = zhou_gas(
-            args.cells,
-            work,
-            Path(args.output),
-            jobs=args.jobs,
-            end_time=args.end_time,
-            backend=_progress_backend(args, args.jobs),
-        )
+        report = zhou_gas(*where, end_time=args.end_time, **runs)
 
     def human() -> None:
         _console().print(
