@@ -838,6 +838,7 @@ def cmd_bench_solver(args: argparse.Namespace) -> int:
             extra=args.set,
             reference=not args.no_reference,
             keep=args.work_dir is not None,
+            say=_say(args),
         )
     result["label"] = args.label
     _bench_log(args, result, "solver")
@@ -859,7 +860,7 @@ def cmd_bench_gas(args: argparse.Namespace) -> int:
     from foamsilo.studies.bench import bench_gas
 
     with _work_dir(args, "foamsilo-bench-") as work:
-        res = bench_gas(args.cells, args.end_time, work)
+        res = bench_gas(args.cells, args.end_time, work, say=_say(args))
     _bench_log(args, res, "gas")
 
     def human() -> None:
@@ -878,7 +879,7 @@ def cmd_bench_mesh(args: argparse.Namespace) -> int:
     from foamsilo.studies.bench import bench_mesh, mesh_report
 
     with _work_dir(args, "foamsilo-bench-") as work:
-        res = bench_mesh(args.cells, work)
+        res = bench_mesh(args.cells, work, say=_say(args))
     return _bench_out(args, res, mesh_report(res), "mesh")
 
 
@@ -887,7 +888,9 @@ def cmd_bench_mpi(args: argparse.Namespace) -> int:
     from foamsilo.studies.bench import bench_mpi, mpi_report
 
     with _work_dir(args, "foamsilo-bench-") as work:
-        res = bench_mpi(args.ranks, args.cells, args.end_time, work, repeats=args.repeats)
+        res = bench_mpi(
+            args.ranks, args.cells, args.end_time, work, repeats=args.repeats, say=_say(args)
+        )
     return _bench_out(args, res, mpi_report(res), "mpi")
 
 
@@ -896,9 +899,8 @@ def cmd_bench_post(args: argparse.Namespace) -> int:
     from foamsilo.studies.bench import bench_post, post_report
 
     with _work_dir(args, "foamsilo-bench-") as work:
-        res = bench_post(
-            args.cells, args.times, work, ranks=args.ranks, interval=args.write_interval
-        )
+        res = bench_post(args.cells, args.times, work, ranks=args.ranks,
+                         interval=args.write_interval, say=_say(args))  # fmt: skip
     return _bench_out(args, res, post_report(res), "post")
 
 

@@ -27,13 +27,18 @@ from foamsilo.case.times import is_time_name
 from foamsilo.errors import FoamsiloError, SceneError
 from foamsilo.foam import edit_dict
 from foamsilo.mesh import cells_estimate
-from foamsilo.pipeline import CaseSpec, prepare, reduce, run, run_case
+from foamsilo.pipeline import CaseSpec, Say, prepare, reduce, run, run_case
 from foamsilo.process import run_command
 from foamsilo.run import prepare_decomposition
 from foamsilo.scene import load_preset
 from foamsilo.solver import ensure_solver
 from foamsilo.studies.cases import git_commit, machine_info, overrides, study_table
 from foamsilo.toolchain import OpenFOAM, find_openfoam
+
+
+def _quiet(_: str) -> None:
+    pass
+
 
 REFERENCE_STEPS = 60
 
@@ -132,6 +137,7 @@ def bench_solver(
     extra: list[str] | None = None,
     reference: bool = True,
     keep: bool = False,
+    say: Say = _quiet,
 ) -> dict[str, Any]:
     """Run the solver benchmark on the planar silo (one run at a time, serial).
 
@@ -149,6 +155,8 @@ def bench_solver(
         Also time stock interFoam on the same mesh.
     keep
         Keep the cases.
+    say
+        Where one line per finished run goes (progress).
     """
     preset = defaults("solver")["preset"]
     of = find_openfoam()
@@ -188,6 +196,7 @@ def bench_solver(
                 ratio_to_interfoam=ms / ref_ms if ref_ms else None,
             )
         )
+        say(f"{len(rows)}/{len(cells)} done: {n} across, {ms:.3g} ms per step")
         if not keep:
             shutil.rmtree(summary.case, ignore_errors=True)
     return {
@@ -263,7 +272,7 @@ def solver_report(results: list[dict[str, Any]]) -> str:
     return "\n".join(out)
 
 
-def bench_gas(cells: int, end_time: float, work_dir: Path) -> dict[str, Any]:
+def bench_gas(cells: int, end_time: float, work_dir: Path, say: Say = _quiet) -> dict[str, Any]:
     """Cost of a time step with the pore-pressure solve against the same case dry.
 
     The cases of ``bench.toml`` [gas] (dry, Darcy, Darcy-Forchheimer), same
@@ -287,6 +296,7 @@ def bench_gas(cells: int, end_time: float, work_dir: Path) -> dict[str, Any]:
             "ms_per_step": 1000 * r["cpu_seconds"] / r["steps"],
             "cells": summary.reduction.cells or 0,
         }
+        say(f"{i + 1}/{len(d['cases'])} done: {case['label']}")
         shutil.rmtree(summary.case, ignore_errors=True)
     dry = rows[d["cases"][0]["label"]]["ms_per_step"]
     for r in rows.values():
@@ -316,7 +326,7 @@ def cells_across_for(preset: str, sets: list[str], target: int) -> tuple[int, in
     return best
 
 
-def bench_mesh(targets: list[int], work_dir: Path) -> dict[str, Any]:
+def bench_mesh(targets: list[int], work_dir: Path, say: Say = _quiet) -> dict[str, Any]:
     """Meshing time and memory of a 3D cylinder (``bench.toml`` [mesh]).
 
     Each size runs the ``foamsilo mesh`` command in a fresh process (what a
@@ -363,6 +373,7 @@ def bench_mesh(targets: list[int], work_dir: Path) -> dict[str, Any]:
                 "checkMesh": payload["checkMesh"],
             }
         )
+        say(f"{len(rows)}/{len(targets)} done: {payload['cells']} cells in {wall:.3g} s")
         shutil.rmtree(out, ignore_errors=True)
     return {
         "benchmark": "mesh",
@@ -423,7 +434,12 @@ def _run_steps(case: Path, of: OpenFOAM, n_procs: int) -> tuple[float, int]:
 
 
 def bench_mpi(
-    ranks: list[int], target_cells: int, end_time: float, work_dir: Path, repeats: int = 3
+    ranks: list[int],
+    target_cells: int,
+    end_time: float,
+    work_dir: Path,
+    repeats: int = 3,
+    say: Say = _quiet,
 ) -> dict[str, Any]:
     """MPI speed-up and the cost of the Python runner on a 3D cylindrical silo.
 
@@ -459,6 +475,7 @@ def bench_mpi(
                 "decompose_s": round(t_dec, 2),
             }
         )
+        say(f"{len(rows)}/{len(ranks)} rank counts done: {np_} ranks, {wall:.3g} s")
         shutil.rmtree(case, ignore_errors=True)
     one = next((r for r in rows if r["ranks"] == 1), rows[0])
     for r in rows:
@@ -470,6 +487,7 @@ def bench_mpi(
         direct_ms.append(1000 * d_wall / d_steps)
         r_wall, r_steps = _run_steps(_copy_case(base, work_dir / "runner"), of, 1)
         runner_ms.append(1000 * r_wall / r_steps)
+        say(f"{len(runner_ms)}/{repeats} runner-overhead pairs done")
     med_d, med_r = statistics.median(direct_ms), statistics.median(runner_ms)
     overhead = {
         "repeats": repeats,
@@ -530,7 +548,12 @@ def mpi_report(result: dict[str, Any]) -> str:
 
 
 def bench_post(
-    target_cells: int, n_times: int, work_dir: Path, ranks: int = 2, interval: float = 2e-4
+    target_cells: int,
+    n_times: int,
+    work_dir: Path,
+    ranks: int = 2,
+    interval: float = 2e-4,
+    say: Say = _quiet,
 ) -> dict[str, Any]:
     """Cost of ``foamsilo post`` on a 3D silo with many written times.
 
@@ -555,6 +578,7 @@ def bench_post(
     )
     res = run(case, of, n_procs=ranks)
     assert res is not None
+    say(f"solver done: {res.steps} steps on {ranks} ranks")
     rows = []
     for label in ("decomposed", "reconstructed"):
         if label == "reconstructed":
@@ -578,6 +602,7 @@ def bench_post(
                 "post_wall_s": round(wall, 2),
             }
         )
+        say(f"{len(rows)}/2 reductions done: {label}, {wall:.3g} s")
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     cells = int(read_metadata(case).get("cells") or 0)
     shutil.rmtree(case, ignore_errors=True)
