@@ -1347,7 +1347,9 @@ def _call(argv: list[str], json_mode: bool) -> int:
         _report_error(exc, json_mode)
         if isinstance(exc, InputError):
             return 2
-        return 130 if isinstance(exc, RunInterruptedError) else 1
+        from foamsilo.slurm import JobsLeftQueuedError
+
+        return 130 if isinstance(exc, (RunInterruptedError, JobsLeftQueuedError)) else 1
     except OSError as exc:  # a file or directory the system refused: say which
         where = f" ({exc.filename})" if exc.filename else ""
         _report_error(FoamsiloError(f"{exc.strerror or exc}{where}"), json_mode)

@@ -80,6 +80,25 @@ class SchedulerError(FoamsiloError):
         super().__init__(f"{self.command} failed (status {returncode}): {output.strip()[-2000:]}")
 
 
+class JobsLeftQueuedError(FoamsiloError):
+    """Ctrl-C while jobs were followed: they stay in Slurm's queue; the message says how to act.
+
+    Parameters
+    ----------
+    job_ids
+        The jobs still queued or running.
+    """
+
+    def __init__(self, job_ids: list[str]) -> None:
+        self.job_ids = job_ids
+        ids = " ".join(job_ids)
+        super().__init__(
+            f"interrupted (Ctrl-C): stopped following; {len(job_ids)} job(s) stay in Slurm's "
+            f"queue ({ids}): run the same command again to follow them, or cancel them with: "
+            f"scancel {ids}"
+        )
+
+
 @dataclass(frozen=True)
 class SlurmOptions:
     """How the cases' jobs are submitted.
@@ -314,9 +333,9 @@ class SlurmBackend:
 
         Raises
         ------
-        KeyboardInterrupt
-            Ctrl-C: the jobs stay queued; the message before it says how to
-            cancel them or follow them again.
+        JobsLeftQueuedError
+            Ctrl-C: the jobs stay queued; the message says how to cancel
+            them or follow them again.
         SchedulerError, ToolchainError
             A Slurm command failed or is missing.
         """
@@ -360,16 +379,12 @@ class SlurmBackend:
                     outcome = stored_outcome(specs[i]) or _lost(specs[i], job_id)
                     finish(i, outcome)
         except KeyboardInterrupt:
-            ids = " ".join(waiting.values())
-            self.say(
-                f"stopped following; {len(waiting)} job(s) stay in Slurm's queue: run the same "
-                f"command again to follow them, or cancel them with: scancel {ids}"
-            )
-            raise
+            raise JobsLeftQueuedError(list(waiting.values())) from None
         return [results[i] for i in range(len(specs))]
 
 
 __all__ = [
+    "JobsLeftQueuedError",
     "SchedulerError",
     "SlurmBackend",
     "SlurmOptions",

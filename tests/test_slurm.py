@@ -196,3 +196,27 @@ def test_the_suite_on_slurm_wants_a_shared_work_dir(tmp_path):
     assert code == 2
     assert res["error"]["field"] == "--work-dir"
     assert not (tmp_path / "out").exists()  # nothing written
+
+
+@pytest.mark.openfoam
+def test_ctrl_c_leaves_the_job_queued_and_says_how_to_cancel_it(tmp_path, solver, slurm):
+    case = tmp_path / "long"
+    argv = [sys.executable, "-m", "foamsilo.cli", "run", "zhou-planar", "-o", str(case),
+            "--slurm", "--poll", "0.5", "--json", "--set", "run.end_time=5"]  # fmt: skip
+    driver = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                              text=True, start_new_session=True)  # fmt: skip
+    deadline = time.monotonic() + 120
+    while not (job_dir(case) / "job.json").exists() and time.monotonic() < deadline:
+        time.sleep(0.2)
+    job = _job(case)
+    while _state(job) != "RUNNING" and time.monotonic() < deadline:
+        time.sleep(0.2)
+    driver.send_signal(signal.SIGINT)  # what the terminal sends the driver on Ctrl-C
+    out, _ = driver.communicate(timeout=60)
+    try:
+        assert driver.returncode == 130
+        err = json.loads(out)["error"]
+        assert f"scancel {job}" in err["message"]
+        assert _state(job) in {"RUNNING", "PENDING"}  # the job goes on without its follower
+    finally:
+        subprocess.run(["scancel", job], env=dict(os.environ))
