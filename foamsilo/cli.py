@@ -82,7 +82,6 @@ def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
     if getattr(args, "json", False) or getattr(args, "quiet", False) or not sys.stderr.isatty():
         yield None
         return
-    from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
     prog = Progress(
@@ -92,8 +91,13 @@ def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
         TextColumn("dt {task.fields[dt]:.2e}"),
         TextColumn("Co {task.fields[co]:.2f} (grains {task.fields[gco]:.2f})"),
         TimeRemainingColumn(),
-        console=Console(stderr=True),
+        console=_console(stderr=True),
         transient=True,
+        # no redirection of sys.stdout/stderr: the bar starts inside the run,
+        # where the runner has sent stdout to the solver's log, and would
+        # "restore" that (closed) log as stdout when it stops
+        redirect_stdout=False,
+        redirect_stderr=False,
     )
     state: dict[str, Any] = {"task": None, "last": 0.0}
 
@@ -830,7 +834,7 @@ def cmd_bench_solver(args: argparse.Namespace) -> int:
     """Cost and accuracy of the solver on the planar silo."""
     from foamsilo.studies.bench import bench_solver, solver_table
 
-    with _work_dir(args, "foamsilo-bench-") as work:
+    with _work_dir(args, "foamsilo-bench-") as work, _progress(args) as progress:
         result = bench_solver(
             args.cells,
             args.end_time,
@@ -839,6 +843,7 @@ def cmd_bench_solver(args: argparse.Namespace) -> int:
             reference=not args.no_reference,
             keep=args.work_dir is not None,
             say=_say(args),
+            progress=progress,
         )
     result["label"] = args.label
     _bench_log(args, result, "solver")
@@ -859,8 +864,8 @@ def cmd_bench_gas(args: argparse.Namespace) -> int:
     """Cost of the pore-pressure solve against the same scene dry."""
     from foamsilo.studies.bench import bench_gas
 
-    with _work_dir(args, "foamsilo-bench-") as work:
-        res = bench_gas(args.cells, args.end_time, work, say=_say(args))
+    with _work_dir(args, "foamsilo-bench-") as work, _progress(args) as progress:
+        res = bench_gas(args.cells, args.end_time, work, say=_say(args), progress=progress)
     _bench_log(args, res, "gas")
 
     def human() -> None:
@@ -898,9 +903,10 @@ def cmd_bench_post(args: argparse.Namespace) -> int:
     """Cost of `foamsilo post` on a 3D silo with many written times."""
     from foamsilo.studies.bench import bench_post, post_report
 
-    with _work_dir(args, "foamsilo-bench-") as work:
+    with _work_dir(args, "foamsilo-bench-") as work, _progress(args) as progress:
         res = bench_post(args.cells, args.times, work, ranks=args.ranks,
-                         interval=args.write_interval, say=_say(args))  # fmt: skip
+                         interval=args.write_interval, say=_say(args),
+                         progress=progress)  # fmt: skip
     return _bench_out(args, res, post_report(res), "post")
 
 

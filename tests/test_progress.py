@@ -75,3 +75,16 @@ def test_a_sweep_on_a_terminal_shows_its_cases_their_time_and_an_eta(tmp_path, s
     assert [r["status"] for r in json.loads(out)["cases"]] == ["ok", "ok"]
     assert "cases" not in err and "ETA" not in err
     assert Path(tmp_path / "out" / "summary.csv").exists()
+
+
+@pytest.mark.openfoam
+def test_a_run_on_a_terminal_prints_its_summary_after_the_bar(tmp_path, solver):
+    # the bar starts inside the run, where the runner sends stdout to the
+    # solver's log: it must not hand that (closed) log back as stdout
+    argv = [sys.executable, "-m", "foamsilo.cli", "run", "zhou-planar", "-o", str(tmp_path / "c"),
+            "--set", "mesh.cells_across=12", "--set", "run.end_time=0.1",
+            "--set", "run.write_interval=0.05"]  # fmt: skip
+    code, out, err = _on_a_terminal(argv)
+    assert code == 0, err[-3000:]
+    assert "siloFoam" in err and "t = " in err  # the bar was shown
+    assert "mass balance error" in out  # the summary, on stdout

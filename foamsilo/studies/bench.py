@@ -29,7 +29,7 @@ from foamsilo.foam import edit_dict
 from foamsilo.mesh import cells_estimate
 from foamsilo.pipeline import CaseSpec, Say, prepare, reduce, run, run_case
 from foamsilo.process import run_command
-from foamsilo.run import prepare_decomposition
+from foamsilo.run import ProgressCallback, prepare_decomposition
 from foamsilo.scene import load_preset
 from foamsilo.solver import ensure_solver
 from foamsilo.studies.cases import git_commit, machine_info, overrides, study_table
@@ -138,6 +138,7 @@ def bench_solver(
     reference: bool = True,
     keep: bool = False,
     say: Say = _quiet,
+    progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
     """Run the solver benchmark on the planar silo (one run at a time, serial).
 
@@ -157,6 +158,8 @@ def bench_solver(
         Keep the cases.
     say
         Where one line per finished run goes (progress).
+    progress
+        The running case's progress (simulated time, ETA), as ``run_case`` takes it.
     """
     preset = defaults("solver")["preset"]
     of = find_openfoam()
@@ -168,7 +171,8 @@ def bench_solver(
             f"run.write_interval={end_time / 4}",
             *(extra or []),
         ]
-        summary = run_case(_planar_spec(work_dir, f"planar-{n}", preset, sets), of=of)
+        spec = _planar_spec(work_dir, f"planar-{n}", preset, sets)
+        summary = run_case(spec, of=of, progress=progress)
         s = summary.as_json()
         r = s["run"]
         simulated = r["end_time"] - r["start_time"]
@@ -272,7 +276,13 @@ def solver_report(results: list[dict[str, Any]]) -> str:
     return "\n".join(out)
 
 
-def bench_gas(cells: int, end_time: float, work_dir: Path, say: Say = _quiet) -> dict[str, Any]:
+def bench_gas(
+    cells: int,
+    end_time: float,
+    work_dir: Path,
+    say: Say = _quiet,
+    progress: ProgressCallback | None = None,
+) -> dict[str, Any]:
     """Cost of a time step with the pore-pressure solve against the same case dry.
 
     The cases of ``bench.toml`` [gas] (dry, Darcy, Darcy-Forchheimer), same
@@ -288,7 +298,8 @@ def bench_gas(cells: int, end_time: float, work_dir: Path, say: Say = _quiet) ->
             f"run.write_interval={end_time / 2}",
             *overrides(case["set"]),
         ]
-        summary = run_case(_planar_spec(work_dir, f"gas-{i}", d["preset"], sets), of=of)
+        spec = _planar_spec(work_dir, f"gas-{i}", d["preset"], sets)
+        summary = run_case(spec, of=of, progress=progress)
         r = summary.as_json()["run"]
         rows[case["label"]] = {
             "steps": r["steps"],
@@ -554,6 +565,7 @@ def bench_post(
     ranks: int = 2,
     interval: float = 2e-4,
     say: Say = _quiet,
+    progress: ProgressCallback | None = None,
 ) -> dict[str, Any]:
     """Cost of ``foamsilo post`` on a 3D silo with many written times.
 
@@ -576,7 +588,7 @@ def bench_post(
     case = prepare(
         CaseSpec(work_dir / "post", preset, (*sets, f"mesh.cells_across={n}"), overwrite=True), of
     )
-    res = run(case, of, n_procs=ranks)
+    res = run(case, of, n_procs=ranks, progress=progress)
     assert res is not None
     say(f"solver done: {res.steps} steps on {ranks} ranks")
     rows = []
