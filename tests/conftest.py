@@ -79,7 +79,7 @@ def slurm(tmp_path_factory):
     missing = missing_programs()
     if missing:
         pytest.fail(f"Slurm is not installed (no {', '.join(missing)}): {INSTALL} "
-                    "(scripts/setup.sh installs it)")  # fmt: skip
+                    "(bash scripts/test installs it)")  # fmt: skip
     cluster = LocalSlurm(tmp_path_factory.mktemp("slurm"), os.cpu_count() or 1)
     cluster.start()
     mp = pytest.MonkeyPatch()
