@@ -88,6 +88,7 @@ class CaseFields:
         self._reader.enable_patch_array("internalMesh")
         self._cache: dict[tuple[float, tuple[str, ...] | None], Any] = {}
         self._geometry: tuple[int, np.ndarray, np.ndarray] | None = None
+        self._plane: tuple[float, Any, list[np.ndarray]] | None = None
 
     # --------------------------------------------------------------- properties
     @property
@@ -276,6 +277,23 @@ class CaseFields:
         return float(np.sum(w[nu >= CAP_FRACTION * self.nu_cap]) / total)
 
     # ----------------------------------------------------------------- pictures
+    def _mid_plane(self, time: float) -> tuple[Any, list[np.ndarray]]:
+        """Return the mid-plane at ``time`` (all fields) and its cells' outlines in (x, y).
+
+        Cut once per time for both pictures (the outlines are a Python loop
+        over the cells, the slow part on a 3D mesh).
+        """
+        if self._plane is None or self._plane[0] != time:
+            g = self.mesh(time)
+            planar = self.scene.representation == "planar"
+            z0 = float(g.bounds[4] + g.bounds[5]) / 2 if planar else 0.0
+            plane = g.slice(normal="z", origin=(0.0, 0.0, z0))
+            if plane.n_cells == 0:
+                raise FoamsiloError(f"{self.case}: the mid-plane z = {z0:g} m cuts no cell")
+            polys = [np.asarray(plane.get_cell(i).points)[:, :2] for i in range(plane.n_cells)]
+            self._plane = (time, plane, polys)
+        return self._plane[1], self._plane[2]
+
     def picture(self, time: float, path: Path) -> Path:
         """Mid-plane images of p, alpha, |U| and log10 eta side by side (PNG).
 
@@ -289,16 +307,8 @@ class CaseFields:
         import matplotlib.pyplot as plt
         from matplotlib.collections import PolyCollection
 
-        g = self.mesh(time)
         s = self.scene
-        if s.representation == "planar":
-            z0 = float(g.bounds[4] + g.bounds[5]) / 2
-        else:
-            z0 = 0.0
-        plane = g.slice(normal="z", origin=(0.0, 0.0, z0))
-        if plane.n_cells == 0:
-            raise FoamsiloError(f"{self.case}: the mid-plane z = {z0:g} m cuts no cell")
-        polys = [np.asarray(plane.get_cell(i).points)[:, :2] for i in range(plane.n_cells)]
+        plane, polys = self._mid_plane(time)
         rho = s.material.density
         panels = [
             ("granular pressure p [Pa]", np.asarray(plane.cell_data["p"]), "viridis"),
@@ -370,13 +380,8 @@ class CaseFields:
         from matplotlib.tri import Triangulation
         from scipy.interpolate import griddata
 
-        g = self.mesh(time, (ALPHA, "U", "nu1"))
         sc = self.scene
-        z0 = float(g.bounds[4] + g.bounds[5]) / 2 if sc.representation == "planar" else 0.0
-        plane = g.slice(normal="z", origin=(0.0, 0.0, z0))
-        if plane.n_cells == 0:
-            raise FoamsiloError(f"{self.case}: the mid-plane z = {z0:g} m cuts no cell")
-        polys = [np.asarray(plane.get_cell(i).points)[:, :2] for i in range(plane.n_cells)]
+        plane, polys = self._mid_plane(time)
         centres = np.asarray(plane.cell_centers().points)[:, :2]
         alpha = np.asarray(plane.cell_data[ALPHA])
         u = np.asarray(plane.cell_data["U"])
@@ -419,7 +424,7 @@ class CaseFields:
         if sc.representation == "3d":
             ys = (sc.silo.orifice_height or 0.0) + D / 2 if sc.silo.orifice_position == "lateral" \
                 else 0.5 * D  # fmt: skip
-            cut = self.mesh(time, (ALPHA, "U", "nu1")).slice(normal="y", origin=(0.0, ys, 0.0))
+            cut = self.mesh(time).slice(normal="y", origin=(0.0, ys, 0.0))
             if cut.n_cells:
                 section = (cut, ys)
         # widths in proportion to what each panel shows, at one height
