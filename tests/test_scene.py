@@ -88,6 +88,8 @@ def test_pressure_floor_default_and_explicit():
         ("silo.shape=hexagonal", "silo.shape", "'rectangular'"),
         ("material.mu_s='a lot'", "material.mu_s", "a number"),
         ("material.grain_diameter=0.03", "material.grain_diameter", "< silo.orifice_width"),
+        ("numerics.rhie_chow_scale=2", "numerics.rhie_chow_scale", "< 2"),
+        ("numerics.rhie_chow_scale=0", "numerics.rhie_chow_scale", "> 0"),
     ],
 )
 def test_bad_values_name_the_field_and_the_allowed_range(override, field, allowed):

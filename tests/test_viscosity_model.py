@@ -136,6 +136,8 @@ def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoa
     ("openBoundaryAcceleration", None, "openBoundaryAcceleration"),
     ("stressPressureCoupling", "explicit", "must be implicit or lagged, not explicit"),
     ("stressPressureCoupling", None, "stressPressureCoupling"),
+    ("rhieChowScale", 2, "rhieChowScale must be in (0, 2), not 2"),
+    ("rhieChowScale", None, "rhieChowScale"),
 ])  # fmt: skip
 def test_the_projection_switches_are_required_and_checked(tmp_path, openfoam, solver,
                                                          key, value, words):  # fmt: skip

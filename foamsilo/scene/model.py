@@ -438,6 +438,16 @@ class Numerics:
         "of the outflow that grows with the step (docs/solver.md)",
         default="cell",
     )
+    rhie_chow_scale: float = _f(
+        "a diagnostic: the face flux's pressure smoothing (the Rhie-Chow part of the "
+        "projection, proportional to the step) scaled by this factor, so that a run shows "
+        "how much of its rate that term sets at a given step (docs/solver.md); 1: the scheme "
+        "itself; the added part is lagged, stable below 2",
+        "",
+        gt=0,
+        lt=2,
+        default=1.0,
+    )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
