@@ -234,3 +234,37 @@ def test_a_rate_swinging_from_step_to_step_is_told_from_a_slow_wander():
     slow = 1e-3 * (1 + 0.03 * np.sin(2 * np.pi * d.time / 0.25))
     assert step_swing(slow) < 0.02 * STEP_SWING_WARNING
     assert np.std(slow) / np.mean(slow) > 0.02  # though its std is as large
+
+
+def _emptying(collapse_at: float) -> tuple:
+    """A steady rate that halves once the silo holds ``collapse_at`` of its fill.
+
+    The series ends 0.1 s (2 sqrt(D/g)) after the fall, so that the fall is
+    the run's last word and not a second plateau.
+    """
+    scene = load_preset("zhou-planar")
+    v0 = scene.silo.width * scene.silo.fill_height
+    t = np.linspace(1e-4, 1.0, 4000)
+    dt = np.diff(np.concatenate([[0.0], t]))
+    q = 1.2 * v0 * (1 - np.exp(-t / 0.02))  # empties the silo in ~0.8 s
+    k = int(np.argmax(v0 - np.cumsum(q * dt) < collapse_at * v0))
+    q[k:] *= 0.5
+    n = int(np.searchsorted(t, t[k] + 0.1))
+    v = v0 - np.cumsum(q * dt)
+    return scene, Discharge(t[:n], dt[:n], q[:n], v[:n], v0, 1.0, 1.0), t[k]
+
+
+def test_the_end_of_an_emptying_discharge_is_cut_from_the_window():
+    """Air ejecting a column: a steady rate until the bed is thin, then a fall."""
+    scene, d, t_fall = _emptying(0.15)
+    st = find_steady(d, scene)
+    assert st.steady, st.reason
+    assert st.t_end < t_fall  # the window ends before the fall...
+    assert st.t_end > t_fall - 2 * scene.discharge_time_scale  # ...not long before
+    assert st.q == pytest.approx(1.2 * d.initial_volume, rel=1e-3)
+
+
+def test_a_fall_while_the_silo_is_still_full_is_no_end_of_discharge():
+    scene, d, _ = _emptying(0.4)
+    st = find_steady(d, scene)
+    assert not st.steady

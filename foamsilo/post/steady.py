@@ -29,6 +29,10 @@ STEADY_MAX_DRIFT = 0.03
 STEADY_MAX_EXCURSION = 0.05
 #: Window ends when the equivalent fill height drops below this many L
 LOW_FILL = 0.5
+#: Below this share of its initial fill the silo is near its end: a rate that
+#: then leaves its plateau for good is the end of the discharge (air breaking
+#: through a thin bed, the free surface nearing the orifice), cut from the window
+END_OF_DISCHARGE = 0.25
 #: The window opens no earlier than this many sqrt(D/g) (the start-up)
 START = 1.0
 #: Width of the moving average judged for the plateau, in sqrt(D/g)
@@ -156,11 +160,26 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
         return nan
     idx = np.flatnonzero(usable)
     i1 = idx[-1]
-    tt, qq = t[: i1 + 1], q[: i1 + 1]
     width = SMOOTHING * T
-    smooth = _smooth(tt, qq, width)
-    later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > START * T)
-    q_ref = float(np.median(qq[later]))
+    h_end = END_OF_DISCHARGE * d.initial_volume / area
+    for _ in range(2):
+        tt, qq = t[: i1 + 1], q[: i1 + 1]
+        smooth = _smooth(tt, qq, width)
+        later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > START * T)
+        q_ref = float(np.median(qq[later]))
+        # the end of the discharge: where the smoothed rate has left the
+        # excursion band for good once the silo is nearly empty, the window
+        # ends half a smoothing width before (the smoothing spreads the fall)
+        off = np.abs(smooth - q_ref) > STEADY_MAX_EXCURSION * abs(q_ref)
+        if not off[-1]:
+            break
+        k = i1
+        while k > idx[0] and off[k - 1]:
+            k -= 1
+        cut = int(np.searchsorted(t, t[k] - width / 2)) - 1
+        if h_eq[k] >= h_end or cut <= idx[0]:
+            break
+        i1 = cut
     # the window opens when the smoothed rate first comes within the band of
     # the plateau (the end of the start-up transient) and no longer leaves
     # the wider excursion band: an overshooting start-up crosses the plateau
