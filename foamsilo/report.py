@@ -216,6 +216,13 @@ def case_report(summary: RunSummary) -> Path:
             "the open boundaries (docs/solver.md).",
             "",
         ]
+        if run.get("emptied_at") is not None:
+            out += [
+                f"The silo emptied: the run ended at t = {_fmt(run['emptied_at'], '.4g')} s "
+                f"(of {_fmt(scene.run.end_time, 'g')} s), with less than half a width of "
+                "grains left (`run.stop_when_empty`).",
+                "",
+            ]
         for k, r in enumerate(run.get("recoveries") or [], start=1):
             out.append(
                 f"* recovery {k}: {r['quantity']} diverged at t = {_fmt(r['time'], '.6g')} s "

@@ -292,6 +292,7 @@ def test_air_ejecting_the_column_stays_under_zhou_eq3(tmp_path, solver):
     make up Q_air (the air is incompressible in the model: exact up to the
     solver tolerances, 0.1% allowed for the window's time sampling).
     """
+    from foamsilo.case.lifecycle import CaseState, inspect
     from foamsilo.post import read_function_object
 
     sets = ["mesh.cells_across=16", "gas.q_air_lpm=12", "material.grain_diameter=124e-6",
@@ -301,7 +302,13 @@ def test_air_ejecting_the_column_stays_under_zhou_eq3(tmp_path, solver):
                   "-o", str(out))  # fmt: skip
     assert code == 0, s
     scene = load_preset("zhou-rect-bottom", sets)
-    assert s["fill_height_end_m"] < 0.5 * scene.silo.width  # emptied within the run
+    # emptied within the run, which then ended (run.stop_when_empty): a
+    # finished case, not one to resume
+    assert s["fill_height_end_m"] < scene.emptied_height
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "finished"
+    assert 0.3 < record["emptied_at"] < 0.8  # measured: the bed empties at ~0.7 s
+    assert inspect(out).state is CaseState.FINISHED
     assert s["steady"], s["steady_reason"]
     limit = scene.material.density * scene.q_air_per_depth
     assert s["Q"] < limit

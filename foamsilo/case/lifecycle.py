@@ -329,6 +329,9 @@ def inspect(path: Path) -> CaseStatus:
     if end is not None and latest_f >= end * (1 - 1e-9) and latest_f > 0:
         return CaseStatus(path, CaseState.FINISHED, **common)  # type: ignore[arg-type]
     status = (record or {}).get("status")
+    if status == "finished" and (record or {}).get("emptied_at") is not None:
+        # the solver ended the run early: the silo had emptied
+        return CaseStatus(path, CaseState.FINISHED, **common)  # type: ignore[arg-type]
     if status in ("diverged", "failed", "time-limit"):
         return CaseStatus(path, CaseState.FAILED, **common)  # type: ignore[arg-type]
     if latest is not None or status in ("interrupted", "running"):

@@ -115,6 +115,13 @@ def template_context(scene: Scene) -> dict[str, Any]:
             | set(scene.gas.taps)
         ),
         "friction_velocity": 1e-3 * (scene.gravity * scene.silo.width) ** 0.5,
+        # the grains' volume on this mesh (a wedge, a unit-depth slab) at the
+        # emptied height: the solver ends the run below it
+        "stop_granular_volume": (
+            scene.emptied_height * scene.cross_section_area * scene.mesh_fraction
+            if scene.run.stop_when_empty
+            else 0.0
+        ),
         "friction_relaxation": scene.numerics.friction_relaxation,
     }
 

@@ -27,8 +27,6 @@ STEADY_TOLERANCE = 0.02
 STEADY_MAX_DRIFT = 0.03
 #: Largest excursion of the smoothed Q from its mean still called steady
 STEADY_MAX_EXCURSION = 0.05
-#: Window ends when the equivalent fill height drops below this many L
-LOW_FILL = 0.5
 #: Below this share of its initial fill the silo is near its end: a rate that
 #: then leaves its plateau for good is the end of the discharge (air breaking
 #: through a thin bed, the free surface nearing the orifice), cut from the window
@@ -151,7 +149,7 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
     t, q = d.time, d.mass_flow
     area = scene.cross_section_area  # volume / area: the equivalent fill height
     h_eq = d.volume / area
-    usable = (t > START * T) & (h_eq > LOW_FILL * scene.silo.width)
+    usable = (t > START * T) & (h_eq > scene.emptied_height)
     nan = SteadyState(False, math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
     if usable.sum() < 20:
         nan.reason = (

@@ -44,6 +44,7 @@ _RE_RES = re.compile(
 )
 _RE_CONT = re.compile(r"^time step continuity errors : sum local = " + _FLOAT)
 _RE_EXEC = re.compile(r"^ExecutionTime = " + _FLOAT + r" s")
+_RE_EMPTIED = re.compile(r"^The silo has emptied: .* at t = " + _FLOAT)
 _RE_ALPHA = re.compile(
     r"^Phase-1 volume fraction = "
     + _FLOAT
@@ -129,6 +130,8 @@ class LogMonitor:
         self._pending: dict[str, float] = {}
         self._max_dt = 0.0
         self.end_seen = False
+        #: time at which the solver ended the run because the silo had emptied
+        self.emptied_at: float | None = None
 
     @property
     def current_time(self) -> float | None:
@@ -159,6 +162,10 @@ class LogMonitor:
             return
         if line == "End":
             self.end_seen = True
+            return
+        m = _RE_EMPTIED.match(line)
+        if m:
+            self.emptied_at = float(m.group(1))
             return
         m = _RE_CO.match(line)
         if m:

@@ -80,7 +80,8 @@ class RunResult:
     case
         The case directory.
     completed
-        The solver reached its end time and printed ``End``.
+        The solver reached its end time (or ended the run, the silo emptied)
+        and printed ``End``.
     start_time, end_time
         Simulated times at start and at the end of this run [s].
     steps
@@ -91,6 +92,9 @@ class RunResult:
         Peak resident memory of the solver [MB] (None if unknown).
     n_procs
         MPI ranks it ran on (1: serial).
+    emptied_at
+        Simulated time at which the solver ended the run because the silo had
+        emptied (``run.stop_when_empty``), before its end time; None otherwise.
     """
 
     case: Path
@@ -102,6 +106,7 @@ class RunResult:
     cpu_seconds: float
     max_rss_mb: float | None
     n_procs: int = 1
+    emptied_at: float | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form (the ``run`` section of the summary)."""
@@ -386,4 +391,5 @@ def run_solver(
         cpu_seconds=cpu,
         max_rss_mb=float(rss) if rss else None,
         n_procs=n_procs,
+        emptied_at=monitor.emptied_at,
     )

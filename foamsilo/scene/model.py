@@ -24,6 +24,9 @@ WEDGE_ANGLE_DEG = 5.0
 #: the last iterate's pressure down the column and the rate swings from step
 #: to step, or the run diverges (docs/solver.md, "Tall columns")
 TALL_COLUMN = 10.0
+#: Equivalent fill height, in silo widths, below which the discharge is over
+#: (Scene.emptied_height)
+EMPTIED_FILL = 0.5
 
 Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 
@@ -393,6 +396,11 @@ class Run:
         default=None,
     )
     n_procs: int = _f("MPI ranks (1: serial)", ge=1, le=4096, default=1)
+    stop_when_empty: bool = _f(
+        "end the run once the silo holds less than half a width of grains (an equivalent "
+        "fill height below 0.5 L: the end of the discharge, which no steady window reaches)",
+        default=True,
+    )
     max_recoveries: int = _f(
         "times a diverged run goes back to its latest complete time with the step halved "
         "before it is given up (0: stop at the first divergence)",
@@ -519,6 +527,17 @@ class Scene:
             # r^2 sin(a)/2, not the sector r^2 a/2
             return math.sin(math.radians(WEDGE_ANGLE_DEG)) / (2 * math.pi)
         return 1.0
+
+    @property
+    def emptied_height(self) -> float:
+        """Equivalent fill height [m] below which the discharge is over.
+
+        Half a silo width: below it the free surface dips into the orifice's
+        region and what is left is the end of the discharge (and the heaps in
+        a flat bottom's corners); no steady window reaches it, and a run with
+        ``run.stop_when_empty`` ends there.
+        """
+        return EMPTIED_FILL * self.silo.width
 
     @property
     def cross_section_area(self) -> float:

@@ -84,6 +84,20 @@ int main(int argc, char *argv[])
     #include "setInitialDeltaT.H"
 
     // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
+    // The run ends once fewer grains than this are left (controlDict
+    // stopGranularVolume, 0: never): the silo has emptied, and what would
+    // follow (the last grains in the corners, air jetting through the
+    // orifice) is no discharge
+    const scalar stopGranularVolume
+    (
+        runTime.controlDict().get<scalar>("stopGranularVolume")
+    );
+    const bool stopWhenEmpty
+    (
+        stopGranularVolume > 0
+     && gSum(alpha1.primitiveField()*mesh.V().field()) > stopGranularVolume
+    );
+
     Info<< "\nStarting time loop\n" << endl;
 
     while (runTime.run())
@@ -127,7 +141,21 @@ int main(int argc, char *argv[])
             }
         }
 
-        runTime.write();
+        const scalar granularVolume =
+            stopWhenEmpty
+          ? gSum(alpha1.primitiveField()*mesh.V().field())
+          : GREAT;
+        if (granularVolume < stopGranularVolume)
+        {
+            Info<< "The silo has emptied: granular volume " << granularVolume
+                << " m3 below " << stopGranularVolume << " m3 at t = "
+                << runTime.timeName() << nl << endl;
+            runTime.writeAndEnd();
+        }
+        else
+        {
+            runTime.write();
+        }
 
         runTime.printExecutionTime(Info);
     }
