@@ -390,7 +390,8 @@ class Run:
         "Courant number limit over the grains only (0: not used)", "", ge=0, le=10, default=0.0
     )
     max_delta_t: float | None = _f(
-        "largest time step (a safety net; the Courant limits set the step); default 0.05 sqrt(L/g)",
+        "largest time step (a safety net; the Courant limits set the step); default 0.05 "
+        "sqrt(L/g), and with gas coupling at most the grains' drag relaxation time rho kappa/mu",
         "s",
         gt=0,
         default=None,
@@ -670,10 +671,25 @@ class Scene:
 
     @property
     def delta_t_max(self) -> float:
-        """Largest time step [s]."""
+        """Largest time step [s]: ``run.max_delta_t``, or 0.05 sqrt(L/g) and the gas relaxation."""
         if self.run.max_delta_t is not None:
             return self.run.max_delta_t
-        return 0.05 * self.time_scale
+        dt = 0.05 * self.time_scale
+        tau = self.gas_relaxation_time
+        return dt if tau is None else min(dt, tau)
+
+    @property
+    def gas_relaxation_time(self) -> float | None:
+        """Time [s] the Darcy drag takes to bring the grains to the air's pace: rho kappa / mu_air.
+
+        The pore pressure's force on the grains is taken from the step before:
+        a step longer than this relaxation time leaves an oscillation of the
+        rate with a period of ~8 steps (docs/gas.md, "The gas coupling's time
+        step"). None without gas coupling.
+        """
+        if not self.gas_coupled:
+            return None
+        return self.material.density * self.permeability / self.air.viscosity
 
     @property
     def p_min(self) -> float:
