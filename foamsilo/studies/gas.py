@@ -352,10 +352,7 @@ def gas_extremes(
     rows = run_rows(cases, Path(work_dir), backend or jobs, limit)
     for c, r in zip(cases, rows, strict=True):
         scene = load_preset(c.preset, c.sets)
-        if (
-            r.get("fill_height_end_m") is not None
-            and r["fill_height_end_m"] < 0.5 * scene.silo.width
-        ):
+        if r.get("fill_height_end_m") is not None and r["fill_height_end_m"] < scene.emptied_height:
             r["emptied"] = True
         # Zhou eq. 3: air injected into a sealed silo can push out at most its
         # own volume of bulk grains, rho_b Q_air (the grains that leave and the
