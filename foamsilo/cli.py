@@ -702,11 +702,48 @@ def _row_printer(args: argparse.Namespace) -> Callable[[dict[str, Any]], None]:
 
 @contextlib.contextmanager
 def _work_dir(args: argparse.Namespace, prefix: str) -> Iterator[Path]:
+    """Yield the study's work directory: ``--work-dir``, or a temporary one.
+
+    A temporary one is removed afterwards, but for the cases that failed or
+    were interrupted: those are kept for inspection (the reports name them),
+    and stderr says where.
+    """
     if args.work_dir:
         yield Path(args.work_dir)
         return
-    with tempfile.TemporaryDirectory(prefix=prefix) as tmp:
-        yield Path(tmp)
+    tmp = Path(tempfile.mkdtemp(prefix=prefix))
+    try:
+        yield tmp
+    finally:
+        kept = _remove_all_but_failed(tmp)
+        if kept:
+            _console(stderr=True).print(
+                f"foamsilo: kept for inspection (failed or interrupted): "
+                f"{', '.join(str(k) for k in kept)}"
+            )
+
+
+def _remove_all_but_failed(work: Path) -> list[Path]:
+    """Remove ``work`` but for its failed or interrupted cases; return those."""
+    import shutil
+
+    from foamsilo.case.lifecycle import CaseState, inspect
+
+    keep = [
+        meta.parent
+        for meta in sorted(work.rglob("foamsilo.json"))
+        if inspect(meta.parent).state in (CaseState.FAILED, CaseState.INTERRUPTED)
+    ]
+    if not keep:
+        shutil.rmtree(work, ignore_errors=True)
+        return []
+    for entry in work.iterdir():
+        if not any(k == entry or entry in k.parents for k in keep):
+            if entry.is_dir():
+                shutil.rmtree(entry, ignore_errors=True)
+            else:
+                entry.unlink(missing_ok=True)
+    return keep
 
 
 def cmd_validate(args: argparse.Namespace) -> int:

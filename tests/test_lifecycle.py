@@ -355,3 +355,27 @@ def test_a_rate_swinging_from_step_to_step_is_warned_of(finished, tmp_path):
     assert s["Q_step_swing"] == pytest.approx(0.03 * np.sqrt(2), rel=0.05)
     assert any("swings by 4.2%" in w for w in s["warnings"]), s["warnings"]
     assert "swings by 4.2%" in (swinging / "report.md").read_text()
+
+
+def test_a_study_keeps_its_failed_cases_for_inspection(tmp_path, monkeypatch, capsys):
+    """A temporary work directory goes, but for the cases a report calls kept."""
+    import argparse
+    import json
+
+    from foamsilo.cli import _work_dir
+
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    args = argparse.Namespace(work_dir=None)
+    with _work_dir(args, "study-") as work:
+        for name, status in (("00", "diverged"), ("01", "finished"), ("02", "interrupted")):
+            case = work / name
+            case.mkdir()
+            (case / "foamsilo.json").write_text("{}")
+            (case / "run.json").write_text(json.dumps({"status": status}))
+        (work / "study.log").write_text("")
+    assert (work / "00").is_dir() and (work / "02").is_dir()  # kept
+    assert not (work / "01").exists() and not (work / "study.log").exists()
+    assert "kept for inspection" in capsys.readouterr().err
+    with _work_dir(args, "clean-") as clean:
+        (clean / "00").mkdir()
+    assert not clean.exists()  # nothing failed: nothing left behind
