@@ -118,3 +118,37 @@ def test_bad_sweep_is_refused_before_anything_runs(tmp_path, extra, grid_value, 
         load_sweep(sweep_file(tmp_path, extra, grid_value))
     assert err.value.field == field
     assert not (tmp_path / "out").exists()
+
+
+def test_pyfoam_timers_that_rearm_themselves_are_stopped():
+    """PyFoam's stop-file timer starts its successor; a cancel during its callback missed it.
+
+    The missed timer re-armed forever and kept pytest from exiting after its
+    summary (seen in a CI rehearsal). Here the callback re-arms every 10 ms,
+    so the cancel meets running callbacks.
+    """
+    import threading
+    import time
+
+    from foamsilo.run.runner import _stop_pyfoam_timers
+
+    class Thread:
+        timer = None
+        timer2 = None
+
+    thrd = Thread()
+
+    def rearm() -> None:
+        thrd.timer2 = threading.Timer(0.01, rearm)
+        thrd.timer2.start()
+
+    rearm()
+    for _ in range(20):
+        time.sleep(0.013)
+        _stop_pyfoam_timers(thrd)
+        time.sleep(0.05)
+        assert not thrd.timer2.is_alive()
+        rearm()
+    _stop_pyfoam_timers(thrd)
+    time.sleep(0.05)
+    assert not thrd.timer2.is_alive()

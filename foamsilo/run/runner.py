@@ -71,6 +71,31 @@ class StepRelease:
     released_at: float | None = None
 
 
+def _stop_pyfoam_timers(thread: Any) -> None:
+    """Cancel the PyFoam thread's re-arming timers for good.
+
+    ``FoamThread`` polls for a stop file and the memory every 5 s with
+    ``threading.Timer`` callbacks that start their successor; its own cancel
+    at the end of the run misses a callback that is running at that moment,
+    which then re-arms forever and, not being a daemon, keeps the interpreter
+    from exiting (seen: pytest hung after its summary). Cancel, wait for a
+    running callback, and cancel what it started.
+    """
+    for name in ("timer", "timer2"):
+        for _ in range(5):
+            t = getattr(thread, name, None)
+            if t is None:
+                break
+            t.cancel()
+            try:
+                t.join(timeout=2.0)
+            except RuntimeError:  # made by a callback, not started yet
+                time.sleep(0.05)
+                continue
+            if getattr(thread, name, None) is t:
+                break
+
+
 @dataclass
 class RunResult:
     """Outcome of a solver run.
@@ -355,6 +380,7 @@ def run_solver(
         with contextlib.redirect_stdout(log):
             data = runner.start()
             runner.run.join()  # the solver process is reaped: its rusage is final
+            _stop_pyfoam_timers(runner.run)
     finally:
         if old_handler is not None:
             signal.signal(signal.SIGINT, old_handler)
