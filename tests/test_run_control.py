@@ -124,8 +124,8 @@ def test_pyfoam_timers_that_rearm_themselves_are_stopped():
     """PyFoam's stop-file timer starts its successor; a cancel during its callback missed it.
 
     The missed timer re-armed forever and kept pytest from exiting after its
-    summary (seen in a CI rehearsal). Here the callback re-arms every 10 ms,
-    so the cancel meets running callbacks.
+    summary (seen in a CI rehearsal). Here the cancel comes while a callback
+    is running (it takes 0.1 s before it re-arms).
     """
     import threading
     import time
@@ -139,16 +139,13 @@ def test_pyfoam_timers_that_rearm_themselves_are_stopped():
     thrd = Thread()
 
     def rearm() -> None:
+        time.sleep(0.1)
         thrd.timer2 = threading.Timer(0.01, rearm)
         thrd.timer2.start()
 
-    rearm()
-    for _ in range(20):
-        time.sleep(0.013)
-        _stop_pyfoam_timers(thrd)
-        time.sleep(0.05)
-        assert not thrd.timer2.is_alive()
-        rearm()
+    thrd.timer2 = threading.Timer(0.01, rearm)
+    thrd.timer2.start()
+    time.sleep(0.05)  # the callback is running now
     _stop_pyfoam_timers(thrd)
-    time.sleep(0.05)
+    time.sleep(0.3)
     assert not thrd.timer2.is_alive()
