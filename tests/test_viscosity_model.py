@@ -131,21 +131,35 @@ def test_a_misspelt_pressure_name_is_a_fatal_error_not_the_cap(tmp_path, openfoa
     assert "pGranular" in err.value.output and "muICoeffs.pName" in err.value.output
 
 
-@pytest.mark.parametrize(("key", "value", "words"), [
-    ("openBoundaryAcceleration", "faces", "must be face or cell, not faces"),
-    ("openBoundaryAcceleration", None, "openBoundaryAcceleration"),
-    ("stressPressureCoupling", "explicit", "must be implicit or lagged, not explicit"),
-    ("stressPressureCoupling", None, "stressPressureCoupling"),
-    ("rhieChowScale", 2, "rhieChowScale must be in (0, 2), not 2"),
-    ("rhieChowScale", None, "rhieChowScale"),
+COURANT = "courant"  # the cases that need numerics.face_smoothing = 'courant'
+
+
+@pytest.mark.parametrize(("key", "value", "words", "smoothing"), [
+    ("openBoundaryAcceleration", "faces", "must be face or cell, not faces", "step"),
+    ("openBoundaryAcceleration", None, "openBoundaryAcceleration", "step"),
+    ("stressPressureCoupling", "explicit", "must be implicit or lagged, not explicit", "step"),
+    ("stressPressureCoupling", None, "stressPressureCoupling", "step"),
+    ("rhieChowScale", 2, "rhieChowScale must be in (0, 2), not 2", "step"),
+    ("rhieChowScale", None, "rhieChowScale", "step"),
+    ("faceSmoothing", "grid", "must be courant or step, not grid", "step"),
+    ("faceSmoothing", None, "faceSmoothing", "step"),
+    ("faceSmoothingMaxRatio", 0.5,
+     "faceSmoothingMaxRatio >= 1, not 0.5, 0.005048187773 and 0.5", COURANT),
+    ("faceSmoothingCourant", 0, "faceSmoothingCourant and faceSmoothingMaxStep must be > 0",
+     COURANT),
+    ("faceSmoothingMaxStep", None, "faceSmoothingMaxStep", COURANT),
 ])  # fmt: skip
 def test_the_projection_switches_are_required_and_checked(tmp_path, openfoam, solver,
-                                                         key, value, words):  # fmt: skip
-    """A hand-edited fvSolution with no or a wrong PIMPLE switch of the projection stops."""
+                                                         key, value, words, smoothing):  # fmt: skip
+    """A hand-edited fvSolution with no or a wrong PIMPLE switch of the projection stops.
+
+    The Courant smoothing's numbers are read only with faceSmoothing courant.
+    """
     from foamsilo.errors import FoamError
     from foamsilo.foam import edit_dict
 
-    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01})
+    scene = coarse_planar(**{"run.end_time": 0.01, "run.write_interval": 0.01,
+                             "numerics.face_smoothing": f"'{smoothing}'"})  # fmt: skip
     case = create_case(scene, tmp_path / "switch", openfoam).path
     with edit_dict(case / "system" / "fvSolution") as fv:
         if value is None:

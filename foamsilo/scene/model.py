@@ -457,6 +457,30 @@ class Numerics:
         lt=2,
         default=1.0,
     )
+    face_smoothing: Literal["step", "courant"] = _f(
+        "size of the face flux's pressure smoothing (the Rhie-Chow part of the projection): "
+        "the step taken (the scheme so far: a capped or recovered run's steady rate moves "
+        "with its cap), or the step at which the all-cell Courant number would be "
+        "face_smoothing_courant, so that the steady rate does not depend on the caps "
+        "(docs/solver.md)",
+        default="step",
+    )
+    face_smoothing_courant: float = _f(
+        "with face_smoothing = 'courant': the Courant number whose step sizes the smoothing "
+        "(never less than the step taken)",
+        "",
+        gt=0,
+        le=10,
+        default=0.5,
+    )
+    face_smoothing_max_ratio: float = _f(
+        "with face_smoothing = 'courant': the largest smoothing step in steps taken (the "
+        "pressure relaxes by the step's share of it per step)",
+        "",
+        ge=1,
+        le=100,
+        default=4.0,
+    )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
@@ -674,9 +698,19 @@ class Scene:
         """Largest time step [s]: ``run.max_delta_t``, or 0.05 sqrt(L/g) and the gas relaxation."""
         if self.run.max_delta_t is not None:
             return self.run.max_delta_t
-        dt = 0.05 * self.time_scale
+        dt = self.default_step_cap
         tau = self.gas_relaxation_time
         return dt if tau is None else min(dt, tau)
+
+    @property
+    def default_step_cap(self) -> float:
+        """The step cap of a scene without gas coupling [s]: 0.05 sqrt(L/g).
+
+        Also the largest face-smoothing step (``numerics.face_smoothing =
+        'courant'``), which no other cap (gas, ``run.max_delta_t``, a
+        recovery's) lowers.
+        """
+        return 0.05 * self.time_scale
 
     @property
     def gas_relaxation_time(self) -> float | None:

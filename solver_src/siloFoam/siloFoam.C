@@ -106,7 +106,25 @@ int main(int argc, char *argv[])
         #include "CourantNo.H"
         #include "alphaCourantNo.H"
         #include "granularCourantNo.H"
+        // The step at which the all-cell Courant number would be the
+        // smoothing's, from this step's Courant number (createFields.H)
+        const scalar courantSmoothingStep =
+            faceSmoothingCourant/(CoNum + SMALL)*runTime.deltaTValue();
         #include "setDeltaT.H"
+        faceSmoothingStep = runTime.deltaTValue();
+        if (faceSmoothingByCourant)
+        {
+            faceSmoothingStep = max
+            (
+                min
+                (
+                    min(courantSmoothingStep, faceSmoothingMaxStep),
+                    faceSmoothingMaxRatio*runTime.deltaTValue()
+                ),
+                runTime.deltaTValue()
+            );
+            Info<< "faceSmoothingStep = " << faceSmoothingStep << endl;
+        }
 
         ++runTime;
 
