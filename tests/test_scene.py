@@ -276,3 +276,10 @@ def test_the_stress_coupling_follows_the_column():
     assert tall.stress_pressure_coupling == "implicit"
     forced = load_preset("zhou-cyl-lateral", ["numerics.stress_pressure_coupling='lagged'"])
     assert forced.stress_pressure_coupling == "lagged"
+
+
+def test_a_feeder_solves_its_pressure_tighter():
+    """1e-10 with a feeder, 1e-7 for a free discharge, a user's value kept."""
+    assert load_preset("venier-test2").p_tolerance == 1e-10
+    assert load_preset("zhou-cyl-bottom").p_tolerance == 1e-7
+    assert load_preset("venier-test2", ["numerics.p_tolerance=1e-8"]).p_tolerance == 1e-8
