@@ -213,7 +213,7 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
                 "flow_rate_scale": "rho sqrt(g L^3)"}  # fmt: skip
 
     old = {"presets": {"rows": [row("zhou-planar", 1.0), row("venier-test1", 2.0)]},
-           "wall_s": {}, "commits": {}}  # fmt: skip
+           "wall_s": {"presets": 120.0}, "commits": {}, "jobs": "2 cases at a time"}  # fmt: skip
     (tmp_path / "suite.json").write_text(json.dumps(old))
     ran = []
 
@@ -222,8 +222,13 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
         return {"rows": [row(only, 3.0)]}
 
     monkeypatch.setattr(suite, "presets", fake)
-    result = suite.run_suite(False, tmp_path, tmp_path / "work", only=["presets/zhou-planar"])
+    result = suite.run_suite(False, tmp_path, tmp_path / "work", only=["presets/zhou-planar"],
+                             jobs=1)  # fmt: skip
     assert ran == ["zhou-planar"]
     q = {r["label"]: r["Q"] for r in result["presets"]["rows"]}
     assert q == {"venier-test1": 2.0, "zhou-planar": 3.0}
-    assert "| zhou-planar | planar | lagged |" in (tmp_path / "suite.md").read_text()
+    report = (tmp_path / "suite.md").read_text()
+    assert "| zhou-planar | planar | lagged |" in report
+    # each entry says how its own cases ran: the earlier one 2 at a time, the rerun 1
+    assert "presets 2.0 min (2 cases at a time)" in report
+    assert "presets/zhou-planar 0.0 min (1 cases at a time)" in report

@@ -554,6 +554,10 @@ def run_suite(
         result.pop("checks", None)
     commits = result.get("commits") or {k: result.get("commit") for k in ENTRIES if k in result}
     timing = result.get("wall_s", {})
+    # how each entry's cases ran: a partial rerun with other --jobs keeps the
+    # others' (older reports hold one value for all)
+    earlier = _jobs(result["jobs"]) if "jobs" in result else None
+    ran_as = result.get("jobs_by_entry") or {k: earlier for k in timing if earlier}
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs_words(jobs)})
     for name, sub in split:
         t0 = time.perf_counter()
@@ -572,8 +576,10 @@ def run_suite(
             key = name
         timing[key] = time.perf_counter() - t0
         commits[key] = git_commit()
+        ran_as[key] = result["jobs"]
     result["wall_s"] = timing
     result["commits"] = commits
+    result["jobs_by_entry"] = ran_as
     result["commit"] = ", ".join(sorted({str(c) for c in commits.values() if c}))
     return write_report(result, out_dir, stem)
 
@@ -733,13 +739,17 @@ def _jobs(value: Any) -> str:
 def suite_markdown(result: dict[str, Any], stem: str) -> str:
     """Return the suite's report (Markdown)."""
     m = result["machine"]
+    ran_as = result.get("jobs_by_entry") or {}
     cmd = "foamsilo bench validation" + (" --quick" if result["quick"] else "")
     lines = [
         f"# Validation suite{' (quick)' if result['quick'] else ''}",
         "",
-        f"`{cmd}` on {m['cpu']}, {m['cores']} cores, {_jobs(result['jobs'])}; "
-        f"commit {result['commit']}. Wall time per entry: "
-        + ", ".join(f"{k} {v / 60:.1f} min" for k, v in result["wall_s"].items())
+        f"`{cmd}` on {m['cpu']}, {m['cores']} cores; commit {result['commit']}. "
+        "Wall time per entry: "
+        + ", ".join(
+            f"{k} {v / 60:.1f} min ({ran_as.get(k) or _jobs(result['jobs'])})"
+            for k, v in result["wall_s"].items()
+        )
         + ".",
         "",
     ]
