@@ -16,13 +16,13 @@ the feeder's (docs/solver.md). Tolerances: the volume fraction 1e-4 above 1
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import pytest
 
 from foamsilo.errors import SceneError
 from foamsilo.pipeline import CaseSpec, run_case
+from foamsilo.run import LogMonitor
 from foamsilo.scene import load_preset
 
 FEEDER = 1.0e-5  # m^3/s: 15 g/s of a 1500 kg/m^3 continuum
@@ -30,8 +30,10 @@ FEEDER = 1.0e-5  # m^3/s: 15 g/s of a 1500 kg/m^3 continuum
 
 def _max_volume_fraction(case: Path) -> float:
     """The largest volume fraction the solver reported over the run (its log)."""
-    found = re.findall(r"Max\(alpha\.granular\) = (\S+)", (case / "log.siloFoam").read_text())
-    return max(float(v) for v in found)
+    monitor = LogMonitor(0.5, 0.5)
+    for line in (case / "log.siloFoam").read_text().splitlines():
+        monitor.feed(line)
+    return monitor.alpha_max
 
 
 @pytest.mark.openfoam

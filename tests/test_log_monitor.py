@@ -101,7 +101,7 @@ def test_a_volume_fraction_blowing_up_inside_a_step_is_a_divergence():
     feed_steps(mon, 3)
     ok = "Phase-1 volume fraction = 0.9259196003  Min(alpha.granular) = -2.168019742e-26  Max(alpha.granular) = 1.00000113"
     mon.feed(ok)
-    assert mon.divergence is None
+    assert mon.divergence is None and mon.alpha_max == 1.00000113
     mon.feed(
         "Phase-1 volume fraction = 0.9258084374  Min(alpha.granular) = -17.34392947  "
         "Max(alpha.granular) = 20.91493569"

@@ -132,6 +132,9 @@ class LogMonitor:
         self.end_seen = False
         #: time at which the solver ended the run because the silo had emptied
         self.emptied_at: float | None = None
+        #: the largest volume fraction the solver reported (MULES keeps it
+        #: within ~1e-6 of 1 where the fluxes are divergence-free)
+        self.alpha_max = -math.inf
 
     @property
     def current_time(self) -> float | None:
@@ -215,6 +218,7 @@ class LogMonitor:
         m = _RE_ALPHA.match(line)
         if m:
             lo, hi = float(m.group(2)), float(m.group(3))
+            self.alpha_max = max(self.alpha_max, hi)
             if _isbad(lo) or _isbad(hi) or lo < -ALPHA_BLOWUP or hi > 1 + ALPHA_BLOWUP:
                 self._diverge("volume fraction", f"alpha.granular between {lo:.3g} and {hi:.3g}")
             return
