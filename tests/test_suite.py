@@ -232,3 +232,5 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
     # each entry says how its own cases ran: the earlier one 2 at a time, the rerun 1
     assert "presets 2.0 min (2 cases at a time)" in report
     assert "presets/zhou-planar 0.0 min (1 cases at a time)" in report
+    assert result["jobs_by_entry"] == {"presets": "2 cases at a time",
+                                       "presets/zhou-planar": "1 cases at a time"}  # fmt: skip
