@@ -126,3 +126,14 @@ def test_forchheimer_entries_when_inertial(tmp_path):
     assert float(_entry(pp, "inertialPermeability")) == pytest.approx(
         scene.inertial_permeability, rel=1e-9
     )
+
+
+def test_the_face_viscosity_reaches_the_solver(tmp_path):
+    """numerics.viscosity_interpolation becomes the PIMPLE key siloFoam requires."""
+    from foamsilo.foam.dictionary import read_dict
+
+    for mean in ("linear", "harmonic"):
+        scene = load_preset("zhou-cyl-bottom", [f"numerics.viscosity_interpolation={mean}"])
+        render_templates(scene, tmp_path / mean)
+        pimple = read_dict(tmp_path / mean / "system/fvSolution")["PIMPLE"]
+        assert pimple["viscosityInterpolation"] == mean

@@ -93,6 +93,11 @@ def test_pressure_floor_default_and_explicit():
         ("numerics.face_smoothing=grid", "numerics.face_smoothing", "'courant'"),
         ("numerics.face_smoothing_courant=0", "numerics.face_smoothing_courant", "> 0"),
         ("numerics.face_smoothing_max_ratio=0.5", "numerics.face_smoothing_max_ratio", ">= 1"),
+        (
+            "numerics.viscosity_interpolation=geometric",
+            "numerics.viscosity_interpolation",
+            "'harmonic'",
+        ),
     ],
 )
 def test_bad_values_name_the_field_and_the_allowed_range(override, field, allowed):

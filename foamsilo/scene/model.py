@@ -494,6 +494,14 @@ class Numerics:
         le=100,
         default=4.0,
     )
+    viscosity_interpolation: Literal["linear", "harmonic"] = _f(
+        "the granular viscosity on a face of the stress (its implicit part and the explicit "
+        "transpose): the linear or the harmonic mean of its two cells' (the harmonic one is "
+        "the stress of the two halves in series, exact for a viscosity constant in each "
+        "cell, and keeps the stagnant zone's capped viscosity out of the faces of the "
+        "flowing cells beside it; docs/solver.md)",
+        default="linear",
+    )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
