@@ -165,6 +165,45 @@ def test_a_kill_between_the_two_outputs_keeps_the_mass_balance(tmp_path):
     assert d.mass_balance_error < 1e-12
 
 
+def test_a_restart_drops_the_abandoned_steps_after_its_start(tmp_path):
+    """A run killed after t = 0.35 resumes from 0.3 with a longer first step (0.3-0.4).
+
+    The abandoned run's step ending at 0.35 is not the restart's: kept (it
+    precedes the restart's first row), it put the abandoned run's outflow
+    over 0.3-0.35 beside the restart's volume, and the mass balance of a
+    resumed run was off by 2.5e-6 (tests/test_running.py, seen once under
+    load).
+    """
+    from foamsilo.post import read_discharge
+
+    scene = load_preset("zhou-planar")
+    pp = tmp_path / "postProcessing"
+    old = {0.1: 1.0, 0.2: 1.0, 0.3: 1.0, 0.35: 7.0}  # the abandoned run's flux
+    new = {0.4: 2.0, 0.5: 2.0}  # the restart's: 0.3-0.4, 0.4-0.5
+    vol, v = 100.0, {}
+    for t, dt, q in ((0.1, 0.1, 1.0), (0.2, 0.1, 1.0), (0.3, 0.1, 1.0), (0.4, 0.1, 2.0),
+                     (0.5, 0.1, 2.0)):  # fmt: skip
+        vol -= q * dt
+        v[t] = vol
+    v_old = {**{t: v[t] for t in (0.1, 0.2, 0.3)}, 0.35: v[0.3] - 7.0 * 0.05}
+    for name, rows_old, rows_new in (
+        ("orificeFlow", {t: f"{q}\t0" for t, q in old.items()},
+         {t: f"{q}\t0" for t, q in new.items()}),
+        ("granularVolume", {t: f"{x}" for t, x in v_old.items()},
+         {t: f"{v[t]}" for t in new}),
+    ):  # fmt: skip
+        for start, rows in (("0", rows_old), ("0.3", rows_new)):
+            d = pp / name / start
+            d.mkdir(parents=True)
+            d.joinpath("f.dat").write_text(
+                "# Time\tx\n" + "".join(f"{t}\t{r}\n" for t, r in rows.items())
+            )
+    d = read_discharge(tmp_path, scene)
+    assert d.time.tolist() == [0.1, 0.2, 0.3, 0.4, 0.5]
+    assert d.volume_flux * scene.mesh_fraction == pytest.approx([1.0, 1.0, 1.0, 2.0, 2.0])
+    assert d.mass_balance_error < 1e-12
+
+
 def _noisy(sigma: float, corr_steps: int, n: int = 20000, seed: int = 1):
     """A plateau of 1 with AR(1) noise of standard deviation sigma, correlated over corr_steps."""
     rng = np.random.default_rng(seed)

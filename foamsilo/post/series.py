@@ -101,8 +101,8 @@ def _parse_rows(path: Path, text: str, notes: list[str]) -> tuple[list[str], lis
     return header, rows
 
 
-def _tables(root: Path, pattern: str) -> list[Path]:
-    """Return the newest table of each restart directory, oldest restart first."""
+def _tables(root: Path, pattern: str) -> list[tuple[float, Path]]:
+    """Return the newest table of each restart directory with its start time, oldest first."""
     starts = []
     for p in root.iterdir():
         try:
@@ -112,13 +112,23 @@ def _tables(root: Path, pattern: str) -> list[Path]:
         if p.is_dir():
             starts.append((t0, p))
     files = []
-    for _, start in sorted(starts):
+    for t0, start in sorted(starts):
         # a rerun from the same time writes <name>_<time>.dat beside the old
         # file: the newest one is this run's
         found = sorted(start.glob(pattern), key=lambda f: f.stat().st_mtime)
         if found:
-            files.append(found[-1])
+            files.append((t0, found[-1]))
     return files
+
+
+def _before_restart(rows: np.ndarray, t0: float, block: np.ndarray) -> np.ndarray:
+    """Return the rows of earlier runs that a restart from ``t0`` (first rows ``block``) keeps.
+
+    The restart goes on from t0: every earlier row after t0 is of the
+    abandoned run, also one between t0 and the end of the restart's first
+    step (which may be longer than the abandoned run's).
+    """
+    return rows[rows[:, 0] <= min(t0, block[0, 0]) * (1 + 1e-9)]
 
 
 def read_function_object(case: Path, name: str) -> Series:
@@ -137,7 +147,7 @@ def read_function_object(case: Path, name: str) -> Series:
     columns: list[str] = []
     data = np.empty((0, 0))
     notes: list[str] = []
-    for path in _tables(root, "*.dat"):
+    for t0, path in _tables(root, "*.dat"):
         header, rows = _parse_rows(path, _text(path), notes)
         if not rows:
             continue
@@ -148,7 +158,7 @@ def read_function_object(case: Path, name: str) -> Series:
                 raise DamagedOutputError(
                     f"{path}: {block.shape[1]} columns where the earlier output has {data.shape[1]}"
                 )
-            data = np.vstack([data[data[:, 0] < block[0, 0] - 1e-12], block])
+            data = np.vstack([_before_restart(data, t0, block), block])
         else:
             data = block
     if not data.size:
@@ -171,7 +181,7 @@ def read_probes(
     locs: list[list[float]] = []
     blocks: list[np.ndarray] = []
     notes: list[str] = []
-    for path in _tables(root, f"{field_name}*"):
+    for t0, path in _tables(root, f"{field_name}*"):
         text = _text(path)
         found = [
             [float(v) for v in ln.split("(")[1].split(")")[0].split()]
@@ -184,7 +194,7 @@ def read_probes(
             continue
         block = np.array(rows)
         if blocks:
-            blocks = [b[b[:, 0] < block[0, 0] - 1e-12] for b in blocks]
+            blocks = [_before_restart(b, t0, block) for b in blocks]
         blocks.append(block)
     if not blocks:
         raise FoamsiloError(f"probe output {root} is empty")
