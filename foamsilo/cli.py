@@ -842,7 +842,7 @@ def cmd_bench_validation(args: argparse.Namespace) -> int:
 
 def cmd_bench_verification(args: argparse.Namespace) -> int:
     """Return the code verification (exact profiles; exit 1 when a check fails)."""
-    from foamsilo.studies.verify import run_verification
+    from foamsilo.studies.verify import report_stem, run_verification
 
     say = (
         (lambda _: None)
@@ -850,7 +850,9 @@ def cmd_bench_verification(args: argparse.Namespace) -> int:
         else (lambda m: _console().print(m, markup=False))
     )
     with _work_dir(args, "foamsilo-verify-") as work:
-        res = run_verification(args.quick, Path(args.output), work, args.only or None, say=say)
+        res = run_verification(
+            args.quick, Path(args.output), work, args.only or None, say=say, sets=args.set
+        )
     failed = [c for c in res["checks"] if not c["passed"]]
 
     def human() -> None:
@@ -860,8 +862,7 @@ def cmd_bench_verification(args: argparse.Namespace) -> int:
             value = "none" if c["value"] is None else f"{c['value']:.3g}"
             con.print(f"{mark}  {c['entry']}: {c['name']} = {value} (bound {c['bound']})",
                       markup=False)  # fmt: skip
-        stem = "verification-quick" if args.quick else "verification"
-        con.print(f"report: {args.output}/{stem}.md")
+        con.print(f"report: {args.output}/{report_stem(args.quick, args.set)}.md")
 
     _emit(args, {"ok": not failed, **res}, human)
     return 1 if failed else 0
@@ -1274,6 +1275,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sp.add_argument("--quick", action="store_true", help="one grid per entry (quick_cells)")
     sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
+    sp.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        default=[],
+        help="scene override applied to every case (a lever to measure; report "
+        "verification-set.md)",
+    )
     sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
     sp.add_argument("--work-dir", help="keep the cases here")
     sp.add_argument("--quiet", action="store_true", help="no per-case messages")

@@ -146,3 +146,19 @@ def test_the_peak_is_judged_on_check_cells():
     assert check_row("bagnold", table["bagnold"], rows).cells == 10
     with pytest.raises(FoamsiloError, match="check_cells = 40: not among"):
         check_row("bagnold-regularised", table["bagnold-regularised"], rows[:2])
+
+
+def test_a_lever_reaches_every_case_and_its_own_report():
+    """`bench verification --set`: the override on top of the entry's own, a report of its own."""
+    from foamsilo.studies.verify import channel_for, channel_scene, entries, report_stem
+
+    entry = entries()["bagnold"]
+    channel = channel_for(entry, 10)
+    lever = ["numerics.viscosity_interpolation=harmonic", "numerics.p_tolerance=1e-9"]
+    scene = channel_scene(entry, channel, lever)
+    assert scene.numerics.viscosity_interpolation == "harmonic"
+    assert scene.numerics.p_tolerance == 1e-9  # after the entry's own 1e-10
+    assert channel_scene(entry, channel).numerics.viscosity_interpolation == "linear"
+    # the checked-in report stays the defaults'
+    assert report_stem(False, []) == "verification"
+    assert report_stem(True, lever) == "verification-quick-set"

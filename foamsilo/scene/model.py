@@ -499,7 +499,8 @@ class Numerics:
         "transpose): the linear or the harmonic mean of its two cells' (the harmonic one is "
         "the stress of the two halves in series, exact for a viscosity constant in each "
         "cell, and keeps the stagnant zone's capped viscosity out of the faces of the "
-        "flowing cells beside it; docs/solver.md)",
+        "flowing cells beside it); a diagnostic: the harmonic mean fails the code "
+        "verification at a free surface (docs/solver.md)",
         default="linear",
     )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(

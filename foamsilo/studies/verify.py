@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -97,12 +98,13 @@ def channel_for(entry: dict[str, Any], cells: int) -> Channel:
     )
 
 
-def channel_scene(entry: dict[str, Any], channel: Channel) -> Scene:
+def channel_scene(entry: dict[str, Any], channel: Channel, extra: Sequence[str] = ()) -> Scene:
     """Return the scene a channel takes its grains, air and run from.
 
     Its silo (8 cells across, a slot or disk of 2 cells) only satisfies the
     scene's rules: the channel's mesh replaces it; its fill height is the
-    layer's depth, or above a pipe's top.
+    layer's depth, or above a pipe's top. ``extra`` overrides (``key=value``)
+    come last: a lever to measure (``foamsilo bench verification --set``).
     """
     plane = channel.geometry == "plane"
     width = 0.04 if plane else 2 * channel.depth
@@ -118,6 +120,7 @@ def channel_scene(entry: dict[str, Any], channel: Channel) -> Scene:
         f"run.end_time={float(entry['end_time'])!r}",
         f"run.write_interval={float(entry['write_interval'])!r}",
         *overrides(entry.get("set")),
+        *extra,
     ]
     return load_preset(entry["preset"], sets)
 
@@ -269,13 +272,19 @@ def check_row(name: str, entry: dict[str, Any], rows: list[ChannelResult]) -> Ch
 
 
 def run_entry(
-    name: str, entry: dict[str, Any], quick: bool, work: Path, of: OpenFOAM, say: Any
+    name: str,
+    entry: dict[str, Any],
+    quick: bool,
+    work: Path,
+    of: OpenFOAM,
+    say: Any,
+    extra: Sequence[str] = (),
 ) -> dict[str, Any]:
-    """Run one entry at its resolutions; its rows, orders and checks."""
+    """Run one entry at its resolutions (``extra``: overrides on top); rows, orders, checks."""
     rows: list[ChannelResult] = []
     for cells in pick(entry, "cells", quick):
         channel = channel_for(entry, cells)
-        scene = channel_scene(entry, channel)
+        scene = channel_scene(entry, channel, extra)
         case_dir = work / name / f"cells{cells}"
         t0 = time.perf_counter()
         create_channel_case(scene, channel, case_dir, of, overwrite=True)
@@ -317,8 +326,14 @@ def run_verification(
     work_dir: Path,
     only: list[str] | None = None,
     say: Any = lambda _: None,
+    sets: Sequence[str] = (),
 ) -> dict[str, Any]:
-    """Run the verification; write ``verification[-quick].json``, ``.md`` and ``.png``."""
+    """Run the verification; write ``verification[-quick][-set].json``, ``.md`` and ``.png``.
+
+    ``sets``: scene overrides applied to every case (a lever to measure); its
+    report is ``verification-set``, so that the checked-in one stays the
+    defaults'.
+    """
     table = entries()
     names = only or list(table)
     bad = [n for n in names if n not in table]
@@ -326,12 +341,17 @@ def run_verification(
         raise FoamsiloError(f"unknown verification entry {bad[0]!r}; valid: " + ", ".join(table))
     of = find_openfoam()
     t0 = time.perf_counter()
-    result: dict[str, Any] = {"quick": quick, "machine": machine_info(), "commit": git_commit()}
+    result: dict[str, Any] = {
+        "quick": quick,
+        "set": list(sets),
+        "machine": machine_info(),
+        "commit": git_commit(),
+    }
     for name in names:
-        result[name] = run_entry(name, table[name], quick, Path(work_dir), of, say)
+        result[name] = run_entry(name, table[name], quick, Path(work_dir), of, say, sets)
     result["wall_s"] = time.perf_counter() - t0
     result["checks"] = [c for n in names for c in result[n]["checks"]]
-    stem = "verification-quick" if quick else "verification"
+    stem = report_stem(quick, sets)
     out_dir.mkdir(parents=True, exist_ok=True)
     plot_verification(result, names, out_dir / f"{stem}.png")
     write_whole(out_dir / f"{stem}.json", dumps(result, indent=1) + "\n")
@@ -362,13 +382,20 @@ def plot_verification(result: dict[str, Any], names: list[str], path: Path) -> P
     return finish(fig, list(axes), path)
 
 
+def report_stem(quick: bool, sets: Sequence[str]) -> str:
+    """Name of the report files: ``verification``, ``-quick``, ``-set`` (overrides given)."""
+    return "verification" + ("-quick" if quick else "") + ("-set" if sets else "")
+
+
 def verification_markdown(result: dict[str, Any], names: list[str], stem: str) -> str:
     """Return the report: per law, the table of errors and orders; the checks."""
     m = result["machine"]
+    sets = "".join(f" --set {s}" for s in result.get("set", []))
     lines = [
         "# Code verification of siloFoam" + (" (quick)" if result["quick"] else ""),
         "",
-        f"`foamsilo bench verification{' --quick' if result['quick'] else ''}` on {m['cpu']}, "
+        f"`foamsilo bench verification{' --quick' if result['quick'] else ''}{sets}` on "
+        f"{m['cpu']}, "
         f"{m['cores']} cores, {m['date']}; commit {result['commit']}; "
         f"{result['wall_s']:.0f} s wall in all.",
         "",
