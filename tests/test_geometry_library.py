@@ -270,6 +270,36 @@ def test_a_graded_mesh_passes_checkmesh_and_grows_at_its_rate(preset, rep, tmp_p
 
 
 @pytest.mark.openfoam
+@pytest.mark.parametrize("preset", ["zhou-planar", "zhou-cyl-bottom"])
+def test_an_orifice_edge_refined_mesh_passes_checkmesh(preset, tmp_path, openfoam):
+    from foamsilo.case import create_case
+
+    scene = load_preset(
+        preset,
+        ["mesh.cells_across=48", "mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=4"],
+    )
+    m = create_case(scene, tmp_path / preset, openfoam).mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.cells == cells_estimate(scene)
+    assert set(m.check.cell_types) <= {"hexahedra", "prisms"}
+    assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=3e-3)
+    planar = scene.representation == "planar"
+    widths = _floor_spacing(m.msh_file, planar)
+    h, s = scene.cell_size, scene.silo
+    # the narrowest floor cells (h / 4, to the few % that fit the band) touch
+    # the orifice's edge, one on each side of it
+    edge = (s.width - s.orifice_width) / 2 if planar else s.orifice_width / 2
+    x = np.concatenate([[0.0], np.cumsum(widths)])
+    i = int(np.argmin(np.abs(x - edge)))
+    assert x[i] == pytest.approx(edge, abs=1e-9)
+    assert widths[i - 1] == pytest.approx(h / 4, rel=0.05)
+    assert widths[i] == pytest.approx(h / 4, rel=0.05)
+    assert widths.min() == pytest.approx(widths[i], rel=1e-6)
+    steps = widths[1:] / widths[:-1]
+    assert np.all(np.maximum(steps, 1 / steps) <= 1.3)
+
+
+@pytest.mark.openfoam
 def test_axisymmetric_and_3d_meshes_hold_the_same_granular_volume(tmp_path, openfoam):
     from foamsilo.case import create_case
     from foamsilo.foam import granular_volume

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from foamsilo.mesh import profile_layout, slot_divisions, top_cell_ratio, vertical_rows
@@ -124,3 +125,59 @@ def test_graded_meshes_only_where_they_are_built():
         load_preset("venier-test2", ["mesh.growth_rate=1.1"])  # eccentric outlet
     with pytest.raises(SceneError, match=r"mesh\.growth_rate"):
         load_preset("zhou-planar", ["mesh.growth_rate=2"])
+
+
+@pytest.mark.parametrize("preset", ["zhou-planar", "zhou-cyl-bottom"])
+@pytest.mark.parametrize("n", [24, 36, 48, 72, 144])
+@pytest.mark.parametrize("k", [2.0, 4.0, 8.0])
+def test_the_orifice_edge_columns_narrow_smoothly_to_h_over_k(preset, n, k):
+    scene = load_preset(
+        preset,
+        [f"mesh.cells_across={n}", "mesh.growth_rate=1.1", f"mesh.orifice_edge_refinement={k}"],
+    )
+    lay = profile_layout(scene)
+    h, s = scene.cell_size, scene.silo
+    planar = scene.representation == "planar"
+    floor = [b for b in lay.blocks if b.corners[0][1] == 0.0]
+    widths, bottoms = [], []
+    for b in floor:
+        (x0, _), (x1, _) = b.corners[0], b.corners[1]
+        n_x, r = b.cells[0], b.x_ratio
+        w = [r**j for j in range(n_x)]
+        widths += [(x1 - x0) * c / sum(w) for c in w]
+        bottoms += [b.sides[0]] * n_x
+    widths_a = np.array(widths)
+    x = np.concatenate([[0.0], np.cumsum(widths_a)])
+    assert x[-1] == pytest.approx(s.width if planar else s.width / 2, rel=1e-12)
+    # the orifice patch is the orifice, exactly
+    lo, hi = ((s.width - s.orifice_width) / 2, (s.width + s.orifice_width) / 2) if planar else (
+        0.0, s.orifice_width / 2)  # fmt: skip
+    on = [i for i, side in enumerate(bottoms) if side == "orifice"]
+    assert x[on[0]] == pytest.approx(lo, abs=1e-12) and x[on[-1] + 1] == pytest.approx(hi)
+    # the narrowest cells (h / k to the few % that fit the band) touch the edges
+    edges = [hi] if not planar else [lo, hi]
+    for e in edges:
+        i = int(np.argmin(np.abs(x - e)))
+        for c in (widths_a[i - 1], widths_a[i]):
+            assert c == pytest.approx(h / k, rel=0.05)
+    assert widths_a.min() >= h / k * 0.95
+    # the cells widen smoothly: by at most the growth rate per cell within a
+    # band, within 1.3x where a band meets the next; no orifice cell wider than h
+    steps = widths_a[1:] / widths_a[:-1]
+    assert np.all(np.maximum(steps, 1 / steps) <= 1.3)
+    assert max(widths_a[on]) <= h * (1 + 1e-9)
+    assert lay.n_cells == sum(lay.columns) * sum(r.n for r in lay.rows)
+
+
+def test_the_orifice_edge_is_refined_only_on_graded_profiles():
+    from foamsilo.errors import SceneError
+
+    with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
+        load_preset("zhou-cyl-bottom", ["mesh.orifice_edge_refinement=4"])  # uniform
+    with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
+        load_preset(
+            "zhou-cyl-bottom",
+            ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=4", "mesh.representation='3d'"],
+        )
+    with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement"):
+        load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=0.5"])

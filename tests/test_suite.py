@@ -213,7 +213,8 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
                 "flow_rate_scale": "rho sqrt(g L^3)"}  # fmt: skip
 
     old = {"presets": {"rows": [row("zhou-planar", 1.0), row("venier-test1", 2.0)]},
-           "wall_s": {"presets": 120.0}, "commits": {}, "jobs": "2 cases at a time"}  # fmt: skip
+           "wall_s": {"presets": 120.0}, "commits": {}, "jobs": "2 cases at a time",
+           "machine": {"cpu": "Elsewhere CPU", "cores": 2}}  # fmt: skip
     (tmp_path / "suite.json").write_text(json.dumps(old))
     ran = []
 
@@ -229,8 +230,12 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
     assert q == {"venier-test1": 2.0, "zhou-planar": 3.0}
     report = (tmp_path / "suite.md").read_text()
     assert "| zhou-planar | planar | lagged |" in report
-    # each entry says how its own cases ran: the earlier one 2 at a time, the rerun 1
-    assert "presets 2.0 min (2 cases at a time)" in report
-    assert "presets/zhou-planar 0.0 min (1 cases at a time)" in report
+    # each entry says how its own cases ran, and where: the earlier one 2 at a
+    # time on another machine, the rerun 1 here
+    here = result["machine"]["cpu"]
+    assert "presets 2.0 min (2 cases at a time, Elsewhere CPU)" in report
+    assert f"presets/zhou-planar 0.0 min (1 cases at a time, {here})" in report
+    assert "Elsewhere CPU" in report.splitlines()[2].split(";")[0]
     assert result["jobs_by_entry"] == {"presets": "2 cases at a time",
                                        "presets/zhou-planar": "1 cases at a time"}  # fmt: skip
+    assert result["cpu_by_entry"] == {"presets": "Elsewhere CPU", "presets/zhou-planar": here}

@@ -133,6 +133,69 @@ def graded_segments(
     return [(span, n, 0.5 * (lo + hi))]
 
 
+def edge_bands(span: float, h: float, k: float, growth: float) -> list[tuple[float, int, float]]:
+    """Bands of cells over ``span`` that widen from about ``h / k`` at one end to ``h``.
+
+    Each band is (length, cells, ratio), listed from the fine end; cells grow
+    by ``ratio`` per cell. The growing band's ratio is at most ``growth`` and
+    its last cell is ``h / ratio``, so that the whole cells of ``h`` after it
+    continue the growth; its first cell is ``h / k`` to within the fraction of
+    a cell that fits the band into the span. A span too short for the whole
+    growth is filled by cells growing from ``h / k`` by at most ``growth``
+    (ending narrower than ``h``).
+
+    Examples
+    --------
+    >>> [(round(a, 3), n, round(r, 3)) for a, n, r in edge_bands(10.0, 1.0, 4.0, 2.0)]
+    [(1.0, 2, 2.0), (9.0, 9, 1.0)]
+    """
+    e = h / k
+    if k <= 1.0 + 1e-12 or span <= e * 1.5:
+        return [(span, max(1, round(span / h)), 1.0)]
+
+    def band(n: int) -> float:  # n cells from e, each k^(1/n) times the last
+        r = k ** (1.0 / n)
+        return e * (r**n - 1) / (r - 1)
+
+    n_g = max(1, math.ceil(math.log(k) / math.log(growth) - 1e-9))
+    if span >= band(n_g) + h:
+        m = math.floor((span - band(n_g)) / h + 1e-9)  # whole cells of h after the band
+        target = span - m * h
+        n = n_g
+        while abs(band(n + 1) - target) < abs(band(n) - target):
+            n += 1
+        return [(target, n, k ** (1.0 / n)), (m * h, m, 1.0)]
+
+    def length(n: int, r: float) -> float:  # cells e, e r, ..., e r^(n-1)
+        return n * e if abs(r - 1.0) < 1e-12 else e * (r**n - 1) / (r - 1)
+
+    n = 1
+    while length(n, growth) < span:
+        n += 1
+    lo, hi = 1.0 + 1e-12, growth
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if length(n, mid) < span else (lo, mid)
+    return [(span, n, 0.5 * (lo + hi))]
+
+
+def edge_region(scene: Scene) -> float:
+    """Width [m] of the orifice region beside each orifice edge (graded meshes).
+
+    ``mesh.orifice_region`` D in whole cells, widened to hold the whole growth
+    from the edge's refined cells (``mesh.orifice_edge_refinement``) to the
+    orifice's cells, never past the wall.
+    """
+    s, h, me = scene.silo, scene.cell_size, scene.mesh
+    R, r_o = s.width / 2, s.orifice_width / 2
+    region = max(h, round(me.orifice_region * s.orifice_width / h) * h)
+    bands = edge_bands(10 * R, h, me.orifice_edge_refinement, me.growth_rate)
+    if len(bands) > 1 and region < bands[0][0] + h:  # too short for the growth
+        region = bands[0][0]
+    # a sliver left by the wall would be a cell much narrower than its neighbour
+    return R - r_o if R - r_o - region < 1.5 * h else region
+
+
 def coarse_ratio(scene: Scene) -> float:
     """Largest cell size of a graded mesh over the orifice's cell size (>= 1)."""
     return max(1.0, scene.silo.width / scene.mesh.coarse_cells_across / scene.cell_size)
@@ -299,36 +362,56 @@ def _graded_columns(
     """
     s, h, me = scene.silo, scene.cell_size, scene.mesh
     R, r_o = s.width / 2, s.orifice_width / 2
-    # from the orifice's edge to the wall: the orifice region, then growth
-    region = min(R - r_o, max(h, round(me.orifice_region * s.orifice_width / h) * h))
-    outward: list[tuple[float, int, float]] = [(region, max(1, round(region / h)), 1.0)]
+    k = me.orifice_edge_refinement
+    # from the orifice's edge to the wall: the orifice region (widening from the
+    # edge's refined cells), then growth
+    region = edge_region(scene)
+    outward = edge_bands(region, h, k, me.growth_rate)
     if R - r_o - region > 1e-9 * R:
         outward += graded_segments(R - r_o - region, h, me.growth_rate, coarse_ratio(scene))
+    # from the orifice's edge inward: the orifice's cells widen towards its centre
+    if k <= 1.0 + 1e-12:  # unrefined: the orifice is one column of cells of h
+        n_o = max(1, round(r_o / h)) if scene.representation == "axisymmetric" else None
+        inward = [(r_o, n_o, 1.0)] if n_o else []
+    else:
+        inward = edge_bands(r_o, h, k, me.growth_rate)
     if scene.representation == "axisymmetric":
-        xs, ns, rs = [0.0, r_o], [max(1, round(r_o / h))], [1.0]
+        xs, ns, rs = [0.0], [], []
+        for span, n, r in reversed(inward):  # axis to edge: cells narrow towards +x
+            xs.append(xs[-1] + span)
+            ns.append(n)
+            rs.append(1.0 / r)
+        xs[-1] = r_o
         for span, n, r in outward:
             xs.append(xs[-1] + span)
             ns.append(n)
             rs.append(r)
         xs[-1] = R
-        bottoms: list[Side] = [ORIFICE, *([WALLS] * len(outward))]
+        bottoms: list[Side] = [*([ORIFICE] * len(inward)), *([WALLS] * len(outward))]
         return [(x, 0.0) for x in xs], ns, bottoms, rs
-    # planar, centred slot: the outward bands mirrored on the left
-    n_o = max(2, round(s.orifice_width / h))
-    left_x = [R - r_o]
-    for span, _, _ in outward:
+    # planar, centred slot: the right half (centre to wall) mirrored on the left
+    if inward:
+        half = [(a, n, 1.0 / r) for a, n, r in reversed(inward)] + outward
+        n_mid = 0
+    else:  # unrefined: one column of cells across the whole slot
+        half, n_mid = outward, max(2, round(s.orifice_width / h))
+    centre = r_o if n_mid else 0.0
+    left_x = [R - centre]
+    for span, _, _ in half:
         left_x.append(left_x[-1] - span)
     left_x[-1] = 0.0
-    xs = [*reversed(left_x), R + r_o]
-    right = R + r_o
-    for span, _, _ in outward:
-        right += span
-        xs.append(right)
-    xs[-1] = s.width
-    ns = [n for _, n, _ in reversed(outward)] + [n_o] + [n for _, n, _ in outward]
-    rs = [1.0 / r for _, _, r in reversed(outward)] + [1.0] + [r for _, _, r in outward]
-    walls: list[Side] = [WALLS] * len(outward)
-    return [(x, 0.0) for x in xs], ns, [*walls, ORIFICE, *walls], rs
+    right_x = [R + centre]
+    for span, _, _ in half:
+        right_x.append(right_x[-1] + span)
+    right_x[-1] = s.width
+    xs = [*reversed(left_x), *(right_x if n_mid else right_x[1:])]
+    mid = [(0.0, n_mid, 1.0)] if n_mid else []
+    ns = [n for _, n, _ in [*reversed(half), *mid, *half]]
+    rs = [1.0 / r for _, _, r in reversed(half)] + [r for _, _, r in [*mid, *half]]
+    n_in = len(inward)
+    sides = [*([WALLS] * len(outward)), *([ORIFICE] * n_in)]
+    bottoms = [*sides, *([ORIFICE] if n_mid else []), *reversed(sides)]
+    return [(x, 0.0) for x in xs], ns, bottoms, rs
 
 
 def profile_layout(scene: Scene) -> ProfileLayout:

@@ -367,6 +367,15 @@ class Mesh:
         le=10,
         default=1.0,
     )
+    orifice_edge_refinement: float = _f(
+        "graded planar or axisymmetric mesh: the columns at the orifice's edges are this many "
+        "times narrower than the orifice's cells, and widen by at most growth_rate per cell "
+        "to them on both sides (the flow turns round the edge; 1: no refinement)",
+        "",
+        ge=1,
+        le=32,
+        default=1.0,
+    )
     coarse_cells_across: int = _f(
         "graded mesh: the largest cells are L / coarse_cells_across wide and tall (never "
         "smaller than the orifice's cells; capped so that the headspace keeps two cells)",

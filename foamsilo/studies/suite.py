@@ -558,6 +558,11 @@ def run_suite(
     # others' (older reports hold one value for all)
     earlier = _jobs(result["jobs"]) if "jobs" in result else None
     ran_as = result.get("jobs_by_entry") or {k: earlier for k in timing if earlier}
+    # and on which machine: a partial rerun elsewhere keeps the others' (older
+    # reports hold one machine for all)
+    cpu_of = result.get("cpu_by_entry") or {
+        k: result["machine"]["cpu"] for k in timing if "machine" in result
+    }
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs_words(jobs)})
     for name, sub in split:
         t0 = time.perf_counter()
@@ -577,9 +582,11 @@ def run_suite(
         timing[key] = time.perf_counter() - t0
         commits[key] = git_commit()
         ran_as[key] = result["jobs"]
+        cpu_of[key] = result["machine"]["cpu"]
     result["wall_s"] = timing
     result["commits"] = commits
     result["jobs_by_entry"] = ran_as
+    result["cpu_by_entry"] = cpu_of
     result["commit"] = ", ".join(sorted({str(c) for c in commits.values() if c}))
     return write_report(result, out_dir, stem)
 
@@ -740,16 +747,23 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
     """Return the suite's report (Markdown)."""
     m = result["machine"]
     ran_as = result.get("jobs_by_entry") or {}
+    cpu_of = result.get("cpu_by_entry") or {}
+    cpus = set(cpu_of.values()) | {m["cpu"]}
+    one_cpu = len(cpus) == 1
     cmd = "foamsilo bench validation" + (" --quick" if result["quick"] else "")
+
+    def how(k: str) -> str:
+        jobs = ran_as.get(k) or _jobs(result["jobs"])
+        return jobs if one_cpu else f"{jobs}, {cpu_of.get(k, m['cpu'])}"
+
     lines = [
         f"# Validation suite{' (quick)' if result['quick'] else ''}",
         "",
-        f"`{cmd}` on {m['cpu']}, {m['cores']} cores; commit {result['commit']}. "
-        "Wall time per entry: "
-        + ", ".join(
-            f"{k} {v / 60:.1f} min ({ran_as.get(k) or _jobs(result['jobs'])})"
-            for k, v in result["wall_s"].items()
-        )
+        f"`{cmd}` on {m['cpu'] if one_cpu else ' and '.join(sorted(cpus))}, {m['cores']} "
+        f"cores; commit {result['commit']}. Wall time per entry"
+        + ("" if one_cpu else " (the machine it ran on)")
+        + ": "
+        + ", ".join(f"{k} {v / 60:.1f} min ({how(k)})" for k, v in result["wall_s"].items())
         + ".",
         "",
     ]
