@@ -18,6 +18,7 @@ the gmsh build (:mod:`foamsilo.mesh.profile`, :mod:`foamsilo.mesh.solid`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from foamsilo.scene import Scene
@@ -121,16 +122,27 @@ def graded_segments(
     if not n_g:
         return [(span, max(1, round(span / h)), 1.0)]
     # the span ends within the growth: fewest cells that reach it, ratio fitted
+    n, r = _fill_within_growth(span, length, growth)
+    if n * h >= span:
+        return [(span, max(1, round(span / h)), 1.0)]
+    return [(span, n, r)]
+
+
+def _fill_within_growth(
+    span: float, length: Callable[[int, float], float], growth: float
+) -> tuple[int, float]:
+    """Fewest cells whose growth by at most ``growth`` reaches ``span``, and their ratio.
+
+    ``length(n, r)`` is the length of n cells growing by r per cell.
+    """
     n = 1
     while length(n, growth) < span:
         n += 1
-    if n * h >= span:
-        return [(span, max(1, round(span / h)), 1.0)]
     lo, hi = 1.0 + 1e-12, growth
     for _ in range(200):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if length(n, mid) < span else (lo, mid)
-    return [(span, n, 0.5 * (lo + hi))]
+    return n, 0.5 * (lo + hi)
 
 
 def edge_bands(span: float, h: float, k: float, growth: float) -> list[tuple[float, int, float]]:
@@ -169,14 +181,8 @@ def edge_bands(span: float, h: float, k: float, growth: float) -> list[tuple[flo
     def length(n: int, r: float) -> float:  # cells e, e r, ..., e r^(n-1)
         return n * e if abs(r - 1.0) < 1e-12 else e * (r**n - 1) / (r - 1)
 
-    n = 1
-    while length(n, growth) < span:
-        n += 1
-    lo, hi = 1.0 + 1e-12, growth
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if length(n, mid) < span else (lo, mid)
-    return [(span, n, 0.5 * (lo + hi))]
+    n, r = _fill_within_growth(span, length, growth)
+    return [(span, n, r)]
 
 
 def edge_region(scene: Scene) -> float:
