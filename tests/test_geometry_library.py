@@ -300,6 +300,33 @@ def test_an_orifice_edge_refined_mesh_passes_checkmesh(preset, tmp_path, openfoa
 
 
 @pytest.mark.openfoam
+def test_an_orifice_edge_refined_3d_ogrid_passes_checkmesh(tmp_path, openfoam):
+    from foamsilo.case import create_case
+    from foamsilo.mesh.layout import ogrid_for
+
+    scene = load_preset("venier-test1", ["mesh.cells_across=20", "mesh.growth_rate=1.1",
+                                         "mesh.representation='3d'",
+                                         "mesh.orifice_edge_refinement=4"])  # fmt: skip
+    m = create_case(scene, tmp_path / "v3d", openfoam).mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.cells == cells_estimate(scene)
+    assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=0.01)
+    # outside the orifice the floor's nodes lie on rays: the radial widths
+    # narrow to the orifice's radial cell / 4 at its edge and grow from there
+    # by at most the growth rate
+    plain = ogrid_for(load_preset("venier-test1", ["mesh.cells_across=20",
+                                                   "mesh.representation='3d'"]))  # fmt: skip
+    first = (1 - 0.6) * plain.rings[0] / plain.ring_cells[0][0]
+    r_o = scene.silo.orifice_width / 2
+    widths = _floor_spacing(m.msh_file, planar=False)
+    r = np.concatenate([[0.0], np.cumsum(widths)])
+    out = widths[r[:-1] >= r_o - 1e-9]
+    assert out[0] == pytest.approx(first / 4, rel=0.05)
+    steps = out[1:] / out[:-1]
+    assert np.all(steps <= 1.1 * (1 + 1e-6)) and np.all(steps >= 1 - 1e-6)
+
+
+@pytest.mark.openfoam
 def test_axisymmetric_and_3d_meshes_hold_the_same_granular_volume(tmp_path, openfoam):
     from foamsilo.case import create_case
     from foamsilo.foam import granular_volume

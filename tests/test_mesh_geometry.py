@@ -169,15 +169,12 @@ def test_the_orifice_edge_columns_narrow_smoothly_to_h_over_k(preset, n, k):
     assert lay.n_cells == sum(lay.columns) * sum(r.n for r in lay.rows)
 
 
-def test_the_orifice_edge_is_refined_only_on_graded_profiles():
+def test_the_orifice_edge_is_refined_only_on_graded_meshes():
     from foamsilo.errors import SceneError
 
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
         load_preset("zhou-cyl-bottom", ["mesh.orifice_edge_refinement=4"])  # uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
-        load_preset(
-            "zhou-cyl-bottom",
-            ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=4", "mesh.representation='3d'"],
-        )
+        load_preset("venier-test2", ["mesh.orifice_edge_refinement=4"])  # eccentric, uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement"):
         load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=0.5"])

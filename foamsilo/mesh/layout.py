@@ -535,8 +535,30 @@ def ogrid_for(scene: Scene) -> OGrid:
     n_r1 = max(1, round((1 - 0.6) * r_o / max(size, 0.8 * h)))
     first = (1 - 0.6) * r_o / n_r1
     last = min(coarse, max(first, 2 * q * R / n_q))
-    n_r2, g2 = _growth(R - r_o, first, last)
-    return OGrid((r_o, R), ((n_r1, 1.0), (n_r2, g2)), arcs, orifice_rings=1)
+    k = scene.mesh.orifice_edge_refinement
+    if k <= 1.0 + 1e-12:
+        n_r2, g2 = _growth(R - r_o, first, last)
+        return OGrid((r_o, R), ((n_r1, 1.0), (n_r2, g2)), arcs, orifice_rings=1)
+    # the orifice's edge refined: radial cells narrow to first / k on both
+    # sides of it (as a profile's columns, edge_bands), then grow to the wall
+    growth = scene.mesh.growth_rate
+    inward = edge_bands((1 - 0.6) * r_o, first, k, growth)  # listed from the edge
+    radii, cells = [], []
+    r = r_o - sum(span for span, _, _ in inward)
+    for span, n, ratio in reversed(inward):
+        r += span
+        radii.append(r)
+        cells.append((n, 1.0 / ratio))
+    radii[-1] = r_o
+    outward = edge_bands(R - r_o, first, k, growth)
+    if len(outward) > 1:  # after the growth to `first`, cells grow on to the wall
+        span = outward.pop()[0]
+        outward += graded_segments(span, first, growth, max(1.0, last / first))
+    for span, n, ratio in outward:
+        radii.append(radii[-1] + span)
+        cells.append((n, ratio))
+    radii[-1] = R
+    return OGrid(tuple(radii), tuple(cells), arcs, orifice_rings=len(inward))
 
 
 def cells_estimate(scene: Scene) -> int:

@@ -368,7 +368,7 @@ class Mesh:
         default=1.0,
     )
     orifice_edge_refinement: float = _f(
-        "graded planar or axisymmetric mesh: the columns at the orifice's edges are this many "
+        "graded mesh: the columns (3D: the radial cells) at the orifice's edges are this many "
         "times narrower than the orifice's cells, and widen by at most growth_rate per cell "
         "to them on both sides (the flow turns round the edge; 1: no refinement)",
         "",

@@ -67,13 +67,12 @@ def validate(scene: Scene) -> None:
             f"{scene.representation}, {s.shape}, {s.orifice_position} orifice"
             f"{', off centre' if s.eccentricity else ''}); allowed here: 1 (uniform)",
         )
-    if me.orifice_edge_refinement > 1.0 + 1e-12 and not (
-        me.graded and scene.representation in ("planar", "axisymmetric")
-    ):
+    if me.orifice_edge_refinement > 1.0 + 1e-12 and not me.graded:
         raise SceneError(
             "mesh.orifice_edge_refinement",
             f"got {me.orifice_edge_refinement:g}: the orifice's edges are refined on graded "
-            "planar and axisymmetric meshes (mesh.growth_rate > 1; this scene: "
+            "meshes (mesh.growth_rate > 1, flat-bottomed silos with a centred bottom orifice; "
+            "this scene: "
             f"{scene.representation}, growth rate {me.growth_rate:g}); allowed here: 1",
         )
     if me.fine_height is not None and me.fine_height >= s.height:
