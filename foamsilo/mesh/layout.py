@@ -185,6 +185,11 @@ def edge_bands(span: float, h: float, k: float, growth: float) -> list[tuple[flo
     return [(span, n, r)]
 
 
+def toward_edge(bands: list[tuple[float, int, float]]) -> list[tuple[float, int, float]]:
+    """Bands listed from their fine end (:func:`edge_bands`), turned to run towards it."""
+    return [(span, n, 1.0 / r) for span, n, r in reversed(bands)]
+
+
 def edge_region(scene: Scene) -> float:
     """Width [m] of the orifice region beside each orifice edge (graded meshes).
 
@@ -195,6 +200,7 @@ def edge_region(scene: Scene) -> float:
     s, h, me = scene.silo, scene.cell_size, scene.mesh
     R, r_o = s.width / 2, s.orifice_width / 2
     region = max(h, round(me.orifice_region * s.orifice_width / h) * h)
+    # the growing band as edge_bands lays it out in a span long enough for it
     bands = edge_bands(10 * R, h, me.orifice_edge_refinement, me.growth_rate)
     if len(bands) > 1 and region < bands[0][0] + h:  # too short for the growth
         region = bands[0][0]
@@ -381,26 +387,18 @@ def _graded_columns(
         inward = [(r_o, n_o, 1.0)] if n_o else []
     else:
         inward = edge_bands(r_o, h, k, me.growth_rate)
+    # from the centre (axis) to the wall: cells narrow towards the edge, then widen
+    half = toward_edge(inward) + outward
+    sides: list[Side] = [*([ORIFICE] * len(inward)), *([WALLS] * len(outward))]
     if scene.representation == "axisymmetric":
-        xs, ns, rs = [0.0], [], []
-        for span, n, r in reversed(inward):  # axis to edge: cells narrow towards +x
-            xs.append(xs[-1] + span)
-            ns.append(n)
-            rs.append(1.0 / r)
-        xs[-1] = r_o
-        for span, n, r in outward:
-            xs.append(xs[-1] + span)
-            ns.append(n)
-            rs.append(r)
+        xs = [0.0]
+        for i, (span, _, _) in enumerate(half):
+            xs.append(r_o if i == len(inward) - 1 else xs[-1] + span)
         xs[-1] = R
-        bottoms: list[Side] = [*([ORIFICE] * len(inward)), *([WALLS] * len(outward))]
-        return [(x, 0.0) for x in xs], ns, bottoms, rs
-    # planar, centred slot: the right half (centre to wall) mirrored on the left
-    if inward:
-        half = [(a, n, 1.0 / r) for a, n, r in reversed(inward)] + outward
-        n_mid = 0
-    else:  # unrefined: one column of cells across the whole slot
-        half, n_mid = outward, max(2, round(s.orifice_width / h))
+        return [(x, 0.0) for x in xs], [n for _, n, _ in half], sides, [r for _, _, r in half]
+    # planar, centred slot: the right half mirrored on the left; unrefined,
+    # one column of cells across the whole slot
+    n_mid = 0 if inward else max(2, round(s.orifice_width / h))
     centre = r_o if n_mid else 0.0
     left_x = [R - centre]
     for span, _, _ in half:
@@ -414,9 +412,7 @@ def _graded_columns(
     mid = [(0.0, n_mid, 1.0)] if n_mid else []
     ns = [n for _, n, _ in [*reversed(half), *mid, *half]]
     rs = [1.0 / r for _, _, r in reversed(half)] + [r for _, _, r in [*mid, *half]]
-    n_in = len(inward)
-    sides = [*([WALLS] * len(outward)), *([ORIFICE] * n_in)]
-    bottoms = [*sides, *([ORIFICE] if n_mid else []), *reversed(sides)]
+    bottoms = [*reversed(sides), *([ORIFICE] if n_mid else []), *sides]
     return [(x, 0.0) for x in xs], ns, bottoms, rs
 
 
@@ -545,10 +541,10 @@ def ogrid_for(scene: Scene) -> OGrid:
     inward = edge_bands((1 - 0.6) * r_o, first, k, growth)  # listed from the edge
     radii, cells = [], []
     r = r_o - sum(span for span, _, _ in inward)
-    for span, n, ratio in reversed(inward):
+    for span, n, ratio in toward_edge(inward):
         r += span
         radii.append(r)
-        cells.append((n, 1.0 / ratio))
+        cells.append((n, ratio))
     radii[-1] = r_o
     outward = edge_bands(R - r_o, first, k, growth)
     if len(outward) > 1:  # after the growth to `first`, cells grow on to the wall
