@@ -278,14 +278,17 @@ def test_a_diverged_run_recovers_with_more_iterations_then_goes_back(tmp_path, s
     assert s["run"]["cpu_seconds_all_attempts"] > s["run"]["cpu_seconds"]
     assert s["run"]["wall_seconds_all_attempts"] > s["run"]["wall_seconds"]
     # past the trouble the scene's settings are back, and the running solver
-    # read them: 8 iterations per step before, 3 after (the step under way
-    # when they were written may finish its 8)
+    # read them: 8 iterations per step before, 3 from its re-read on (the
+    # steps between the runner's write and the re-read depend on how far the
+    # runner's reading of the log lags the solver: not counted)
     assert first.get("released_at") is not None and first["released_at"] >= first["release_time"]
     pimple = dict_value(case / "system" / "fvSolution", "PIMPLE")
     assert int(pimple["nOuterCorrectors"]) == scene.outer_correctors == 3
     before, _, after = log.rpartition("recovery 1 of 3")[2].partition("step cap put back")
     assert before.count("PIMPLE: iteration 8") > 10
-    assert after.count("PIMPLE: iteration 8") <= 1 and after.count("PIMPLE: iteration 3") > 10
+    _, reread, after = after.partition("Re-reading object fvSolution")
+    assert reread, "the solver never re-read fvSolution after the runner wrote it"
+    assert after.count("PIMPLE: iteration 8") == 0 and after.count("PIMPLE: iteration 3") > 10
     assert "put back to the scene's settings" in (case / "report.md").read_text()
 
 
