@@ -239,3 +239,19 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
     assert result["jobs_by_entry"] == {"presets": "2 cases at a time",
                                        "presets/zhou-planar": "1 cases at a time"}  # fmt: skip
     assert result["cpu_by_entry"] == {"presets": "Elsewhere CPU", "presets/zhou-planar": here}
+
+
+def test_every_stiff_case_is_a_valid_scene():
+    # the extremes are scenes the suite runs for minutes: a key a preset
+    # does not take, or one it must drop (the thin silo's air flow, unset
+    # with "" for its closed and open tops), fails here, not in the run
+    from foamsilo.scene import load_preset
+    from foamsilo.studies.cases import overrides, study_table
+
+    table = study_table("suite")["extremes"]
+    scenes = {e["label"]: load_preset(e["preset"], overrides(e.get("set"))) for e in table}
+    labels = set(scenes)
+    assert all(e["twin"] in labels for e in table if e.get("twin"))
+    thin = {k: s for k, s in scenes.items() if k.startswith("thin rectangular silo")}
+    assert {s.gas.mode for s in thin.values()} == {"closed-top", "open-top"}
+    assert all(s.gas.q_air_lpm is None and s.silo.thickness == 0.0035 for s in thin.values())
