@@ -255,3 +255,18 @@ def test_every_stiff_case_is_a_valid_scene():
     thin = {k: s for k, s in scenes.items() if k.startswith("thin rectangular silo")}
     assert {s.gas.mode for s in thin.values()} == {"closed-top", "open-top"}
     assert all(s.gas.q_air_lpm is None and s.silo.thickness == 0.0035 for s in thin.values())
+
+
+def test_a_stiff_case_that_diverges_fails_its_check():
+    # the quick suite's former divergences and the full suite's stiff cases
+    # pass only when steady: a recovered-but-steady row passes, a row that
+    # stopped diverged or never settled fails
+    rows = [
+        {"label": "wedge", "outcome": "steady", "Q": 0.0212, "recoveries": 1},
+        {"label": "thin, closed top", "outcome": "diverged", "Q": None},
+        {"label": "thin, open top", "outcome": "not steady", "Q": 5.5},
+    ]
+    by_name = {c.name: c for c in checks({"extremes": {"rows": rows}})}
+    assert by_name["wedge: steady at its defaults"].passed
+    assert not by_name["thin, closed top: steady at its defaults"].passed
+    assert not by_name["thin, open top: steady at its defaults"].passed
