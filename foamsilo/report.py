@@ -236,6 +236,20 @@ def case_report(summary: RunSummary) -> Path:
                 )
                 + _release_said(r)
             )
+        retakes = run.get("step_retakes") or []
+        if retakes:
+            out += [
+                f"The solver took {len(retakes)} step(s) again from their start with half the "
+                "step, their outer iterations having diverged (`run.max_step_retakes`; "
+                "docs/solver.md):",
+                "",
+            ]
+            out += [
+                f"* t = {_fmt(r['time'], '.6g')} s, step {_fmt(r['delta_t'], '.3g')} s taken "
+                f"again with {_fmt(r['retake_delta_t'], '.3g')} s: {r['detail']}"
+                for r in retakes
+            ]
+            out.append("")
         if run.get("recoveries"):
             out += [
                 "",

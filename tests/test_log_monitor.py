@@ -94,21 +94,61 @@ def test_fatal_error_is_collected_not_mistaken_for_the_banner():
     assert len(mon.steps) == 2
 
 
-def test_a_volume_fraction_blowing_up_inside_a_step_is_a_divergence():
-    # thin lab silo at eta_max = 1e5 (docs/validation/suite.md): alpha left
-    # [0, 1] in the 6th outer iteration of a step, SIGFPE two iterations later
+def test_a_step_the_solver_takes_again_is_dropped_and_its_blow_up_not_counted():
+    # siloFoam judges a step's volume fraction itself (createStepRetake.H):
+    # the monitor must not stop a run on an alpha line the solver then
+    # answers by taking the step again with half the step
     mon = LogMonitor(0.5, 0.5)
     feed_steps(mon, 3)
     ok = "Phase-1 volume fraction = 0.9259196003  Min(alpha.granular) = -2.168019742e-26  Max(alpha.granular) = 1.00000113"
     mon.feed(ok)
     assert mon.divergence is None and mon.alpha_max == 1.00000113
+    mon.feed("Time = 0.004")
     mon.feed(
         "Phase-1 volume fraction = 0.9258084374  Min(alpha.granular) = -17.34392947  "
         "Max(alpha.granular) = 20.91493569"
     )
+    assert mon.divergence is None
+    n = len(mon.steps)
+    mon.feed(
+        "Step retaken (1 of 4): volume fraction alpha.granular between -17.34392947 and "
+        "20.91493569 in outer iteration 2, in the step from t = 0.003 with deltaT = 0.001; "
+        "taken again with deltaT = 0.0005"
+    )
+    assert len(mon.steps) == n - 1  # the failed attempt's row is dropped
+    assert mon.retakes == [
+        {
+            "time": 0.003,
+            "detail": "volume fraction alpha.granular between -17.34392947 and 20.91493569 "
+            "in outer iteration 2",
+            "delta_t": 0.001,
+            "retake_delta_t": 0.0005,
+        }
+    ]
+    mon.feed("Time = 0.0035")
+    mon.feed(ok)
+    assert mon.steps[-1].time == 0.0035 and mon.steps[-1].delta_t == 0.0005
+    assert mon.alpha_max == 1.00000113 and mon.divergence is None
+
+
+def test_a_step_that_diverges_after_its_retakes_is_a_divergence():
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 3)
+    mon.feed("--> FOAM FATAL ERROR: ")
+    mon.feed(
+        "Step diverged: volume fraction alpha.granular between -3.1 and 4.2 in outer iteration "
+        "3, in the step from t = 0.002 with deltaT = 6.25e-05, after 4 retakes"
+    )
     d = mon.divergence
-    assert d is not None and d.quantity == "volume fraction" and "-17.3" in d.detail
+    assert d is not None and d.quantity == "volume fraction" and "-3.1" in d.detail
     assert d.time == mon.steps[-1].time
+    mon2 = LogMonitor(0.5, 0.5)
+    feed_steps(mon2, 3)
+    mon2.feed("--> FOAM FATAL ERROR: ")
+    mon2.feed(
+        "Step diverged: Courant number 1e+30 (limit 0.5) at its end, in the step from t = 0.002"
+    )
+    assert mon2.divergence is not None and mon2.divergence.quantity == "Courant number"
 
 
 def test_a_floating_point_trap_is_a_divergence_the_runner_can_recover():

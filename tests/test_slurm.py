@@ -164,7 +164,7 @@ def test_a_failed_job_is_reported_with_its_diagnosis(tmp_path, solver, slurm):
     # diagnosis comes back: quantity, time, last good time, the case kept
     case = tmp_path / "unstable"
     scene = ["numerics.outer_correctors=1", "run.end_time=0.05", "run.write_interval=0.05",
-             LAGGED, "run.max_recoveries=0"]  # fmt: skip
+             LAGGED, "run.max_recoveries=0", "run.max_step_retakes=0"]  # fmt: skip
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--slurm", "--poll", "0.5",
                   "--quiet", *sets(scene))  # fmt: skip
     assert code == 1

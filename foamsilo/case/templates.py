@@ -18,6 +18,14 @@ from foamsilo.resources import templates_dir
 from foamsilo.scene import Scene
 from foamsilo.solver import SOLVER_NAME
 
+#: siloFoam takes a step again (half the step) when its volume fraction leaves
+#: [-this, 1 + this] within the outer iterations: MULES keeps it within ~1e-6
+#: of [0, 1], so this far out is a blow-up, not an overshoot
+RETAKE_ALPHA_EXCURSION = 0.5
+#: ... or when the step ends with a Courant number this many times its limit
+#: (the controller never grows the step by more than 1.2 per step)
+RETAKE_COURANT_FACTOR = 20.0
+
 #: Templates every case gets, by representation (a scene gets what it needs)
 _COMMON = [
     "system/controlDict",
@@ -123,6 +131,8 @@ def template_context(scene: Scene) -> dict[str, Any]:
             else 0.0
         ),
         "friction_relaxation": scene.numerics.friction_relaxation,
+        "retake_alpha_excursion": RETAKE_ALPHA_EXCURSION,
+        "retake_courant_factor": RETAKE_COURANT_FACTOR,
     }
 
 

@@ -6,7 +6,12 @@ error and the execution time, and decides whether the run diverged:
 
 * a NaN or Inf in a residual, a Courant number or the time step;
 * a Courant number far above its limit (``COURANT_BLOWUP`` times);
-* a time step collapsed by ``DT_COLLAPSE`` from the largest one so far.
+* a time step collapsed by ``DT_COLLAPSE`` from the largest one so far;
+* siloFoam's own verdict: a step whose outer iterations diverged (the volume
+  fraction far outside [0, 1], a Courant number blown up at its end) is taken
+  again by the solver with half the step (``Step retaken``, kept in
+  :attr:`LogMonitor.retakes`, the failed attempt's row dropped), and once its
+  retakes are spent it stops with a fatal error (``Step diverged``).
 
 The regular expressions here read the solver's log, never a dictionary.
 """
@@ -20,11 +25,12 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-COURANT_BLOWUP = 20.0
+from foamsilo.case.templates import RETAKE_COURANT_FACTOR
+
+#: A Courant number this many times its limit at a step's start: the solver
+#: retakes a step that ends so (the same factor), so this is a last resort
+COURANT_BLOWUP = RETAKE_COURANT_FACTOR
 DT_COLLAPSE = 1e-4
-#: A volume fraction this far outside [0, 1] (MULES keeps it within ~1e-6)
-#: is a blow-up inside the step's outer iterations, before any Courant check
-ALPHA_BLOWUP = 0.5
 LOG_NAME = "log.siloFoam"
 #: One row per time step of the run (written by :meth:`LogMonitor.write_table`)
 STEP_TABLE = "steps.csv"
@@ -45,6 +51,15 @@ _RE_RES = re.compile(
 _RE_CONT = re.compile(r"^time step continuity errors : sum local = " + _FLOAT)
 _RE_EXEC = re.compile(r"^ExecutionTime = " + _FLOAT + r" s")
 _RE_EMPTIED = re.compile(r"^The silo has emptied: .* at t = " + _FLOAT)
+_RE_RETAKE = re.compile(
+    r"^Step retaken \((\d+) of (\d+)\): (.*), in the step from t = "
+    + _FLOAT
+    + r" with deltaT = "
+    + _FLOAT
+    + r"; taken again with deltaT = "
+    + _FLOAT
+)
+_RE_STEP_DIVERGED = re.compile(r"^Step diverged: (volume fraction|Courant number) (.*)$")
 _RE_ALPHA = re.compile(
     r"^Phase-1 volume fraction = "
     + _FLOAT
@@ -132,9 +147,20 @@ class LogMonitor:
         self.end_seen = False
         #: time at which the solver ended the run because the silo had emptied
         self.emptied_at: float | None = None
-        #: the largest volume fraction the solver reported (MULES keeps it
-        #: within ~1e-6 of 1 where the fluxes are divergence-free)
-        self.alpha_max = -math.inf
+        #: the steps the solver took again, each with why (``detail``), its
+        #: start ``time``, the step that failed and the one it was taken with
+        self.retakes: list[dict[str, float | str]] = []
+        self._alpha_max = -math.inf
+        self._attempt_alpha_max = -math.inf
+
+    @property
+    def alpha_max(self) -> float:
+        """The largest volume fraction the solver reported in the steps it kept.
+
+        MULES keeps it within ~1e-6 of 1 where the fluxes are divergence-free;
+        a step the solver took again does not count.
+        """
+        return max(self._alpha_max, self._attempt_alpha_max)
 
     @property
     def current_time(self) -> float | None:
@@ -159,6 +185,9 @@ class LogMonitor:
             self._in_fatal = True
         if self._in_fatal:
             self.fatal.append(line)
+            m = _RE_STEP_DIVERGED.match(line.strip())
+            if m:
+                self._diverge(m.group(1), m.group(2))
             if "sigFpe::sigHandler" in line:
                 # a floating-point trap is a blow-up the log had no line for
                 self._diverge("floating-point exception", "the solver stopped on SIGFPE")
@@ -198,6 +227,9 @@ class LogMonitor:
             return
         m = _RE_TIME.match(line)
         if m:
+            # the attempt before was kept: no retake line came in between
+            self._alpha_max = max(self._alpha_max, self._attempt_alpha_max)
+            self._attempt_alpha_max = -math.inf
             step = Step(time=float(m.group(1)))
             for k, v in self._pending.items():
                 setattr(step, k, v)
@@ -217,10 +249,29 @@ class LogMonitor:
             return
         m = _RE_ALPHA.match(line)
         if m:
-            lo, hi = float(m.group(2)), float(m.group(3))
-            self.alpha_max = max(self.alpha_max, hi)
-            if _isbad(lo) or _isbad(hi) or lo < -ALPHA_BLOWUP or hi > 1 + ALPHA_BLOWUP:
-                self._diverge("volume fraction", f"alpha.granular between {lo:.3g} and {hi:.3g}")
+            # no verdict here: the solver judges the step and takes it again
+            self._attempt_alpha_max = max(self._attempt_alpha_max, float(m.group(3)))
+            return
+        m = _RE_RETAKE.match(line)
+        if m:
+            self.retakes.append(
+                {
+                    "time": float(m.group(4)),
+                    "detail": m.group(3),
+                    "delta_t": float(m.group(5)),
+                    "retake_delta_t": float(m.group(6)),
+                }
+            )
+            self._attempt_alpha_max = -math.inf
+            if self.steps:
+                failed = self.steps.pop()
+                # the retake prints no Courant or step lines of its own
+                self._pending = {
+                    "courant": failed.courant,
+                    "interface_courant": failed.interface_courant,
+                    "granular_courant": failed.granular_courant,
+                    "delta_t": float(m.group(6)),
+                }
             return
         m = _RE_CONT.match(line)
         if m:

@@ -25,7 +25,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -120,6 +120,10 @@ class RunResult:
     emptied_at
         Simulated time at which the solver ended the run because the silo had
         emptied (``run.stop_when_empty``), before its end time; None otherwise.
+    step_retakes
+        The steps the solver took again with half the step because their outer
+        iterations diverged (``run.max_step_retakes``): each one's start
+        ``time``, ``detail``, failed ``delta_t`` and ``retake_delta_t``.
     """
 
     case: Path
@@ -132,6 +136,7 @@ class RunResult:
     max_rss_mb: float | None
     n_procs: int = 1
     emptied_at: float | None = None
+    step_retakes: list[dict[str, Any]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form (the ``run`` section of the summary)."""
@@ -418,4 +423,5 @@ def run_solver(
         max_rss_mb=float(rss) if rss else None,
         n_procs=n_procs,
         emptied_at=monitor.emptied_at,
+        step_retakes=list(monitor.retakes),
     )

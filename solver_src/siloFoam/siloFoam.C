@@ -30,6 +30,11 @@ Description
       acts on the grains (createPorePressure.H, pfEqn.H; a start from rest
       carries the pore pressure's support, poreSupport.H), and optional
       quasi-2D wall friction (their eq. 14); a dry silo has neither.
+    - A step whose outer iterations diverge (the volume fraction far
+      outside [0, 1] after an advection, or a Courant number blown up at
+      the step's end) is taken again from its start with half the step, up
+      to maxStepRetakes times, then the run stops with a FatalError naming
+      the field and the time (createStepRetake.H, siloTime.H).
     - A static mesh; no MRF, no LTS.
 
     Incompressible, isothermal; the granular phase keeps a constant
@@ -52,6 +57,7 @@ Description
 #include "fixedFluxPressureFvPatchScalarField.H"
 #include "extrapolatedCalculatedFvPatchFields.H"
 #include "muI.H"
+#include "siloTime.H"
 
 // * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * * //
 
@@ -67,7 +73,7 @@ int main(int argc, char *argv[])
 
     #include "addCheckCaseOptions.H"
     #include "setRootCaseLists.H"
-    #include "createTime.H"
+    #include "createSiloTime.H"
     #include "createMesh.H"
     #include "createControl.H"
     #include "createTimeControls.H"
@@ -77,6 +83,7 @@ int main(int argc, char *argv[])
     #include "createPorePressure.H"
     #include "faceReconstruction.H"
     #include "poreSupport.H"
+    #include "createStepRetake.H"
 
     turbulence->validate();
 
@@ -126,37 +133,117 @@ int main(int argc, char *argv[])
             Info<< "faceSmoothingStep = " << faceSmoothingStep << endl;
         }
 
-        ++runTime;
-
-        Info<< "Time = " << runTime.timeName() << nl << endl;
-
-        // --- Pressure-velocity PIMPLE corrector loop
-        while (pimple.loop())
+        // The step, taken again from its start with half the step while
+        // its outer iterations diverge (createStepRetake.H)
+        saveStepStart();
+        const siloTime::stepStart stepStart(runTime.start());
+        for (label retake = 0; ; ++retake)
         {
-            #include "alphaControls.H"
-            #include "alphaEqnSubCycle.H"
+            ++runTime;
 
-            mixture.correct();
+            Info<< "Time = " << runTime.timeName() << nl << endl;
 
-            #include "pfEqn.H"
+            // Why the step failed (empty: it did not)
+            string stepFailure;
 
-            if (pimple.frozenFlow())
+            // --- Pressure-velocity PIMPLE corrector loop
+            while (pimple.loop())
             {
-                continue;
+                if (!stepFailure.empty())
+                {
+                    continue;
+                }
+
+                #include "alphaControls.H"
+                #include "alphaEqnSubCycle.H"
+
+                {
+                    const scalar alphaMin = gMin(alpha1.primitiveField());
+                    const scalar alphaMax = gMax(alpha1.primitiveField());
+                    if
+                    (
+                        !std::isfinite(alphaMin) || !std::isfinite(alphaMax)
+                     || alphaMin < -retakeAlphaExcursion
+                     || alphaMax > 1 + retakeAlphaExcursion
+                    )
+                    {
+                        stepFailure =
+                            "volume fraction " + alpha1.name() + " between "
+                          + Foam::name(alphaMin) + " and " + Foam::name(alphaMax)
+                          + " in outer iteration " + Foam::name(pimple.corr());
+                        continue;
+                    }
+                }
+
+                mixture.correct();
+
+                #include "pfEqn.H"
+
+                if (pimple.frozenFlow())
+                {
+                    continue;
+                }
+
+                #include "UEqn.H"
+
+                // --- Pressure corrector loop
+                while (pimple.correct())
+                {
+                    #include "pEqn.H"
+                }
+
+                if (pimple.turbCorr())
+                {
+                    turbulence->correct();
+                }
             }
 
-            #include "UEqn.H"
-
-            // --- Pressure corrector loop
-            while (pimple.correct())
+            // The Courant number the step ends with (all cells, as
+            // CourantNo.H): a blow-up in the last outer iteration
+            if (stepFailure.empty() && maxCo > 0)
             {
-                #include "pEqn.H"
+                const scalar endCo =
+                    0.5*gMax
+                    (
+                        fvc::surfaceSum(mag(phi))().primitiveField()
+                       /mesh.V().field()
+                    )*runTime.deltaTValue();
+                if (!std::isfinite(endCo) || endCo > retakeCourantFactor*maxCo)
+                {
+                    stepFailure =
+                        "Courant number " + Foam::name(endCo) + " (limit "
+                      + Foam::name(maxCo) + ") at its end";
+                }
             }
 
-            if (pimple.turbCorr())
+            if (stepFailure.empty())
             {
-                turbulence->correct();
+                break;
             }
+
+            const scalar failedDeltaT = runTime.deltaTValue();
+            if (retake >= maxStepRetakes)
+            {
+                FatalErrorInFunction
+                    << "Step diverged: " << stepFailure.c_str()
+                    << ", in the step from t = " << stepStart.value
+                    << " with deltaT = " << failedDeltaT << ", after "
+                    << retake << " retakes"
+                    << exit(FatalError);
+            }
+
+            restoreStepStart();
+            runTime.rewind(stepStart);
+            runTime.setDeltaT(0.5*failedDeltaT);
+            if (!faceSmoothingByCourant)
+            {
+                faceSmoothingStep = runTime.deltaTValue();
+            }
+            Info<< "Step retaken (" << retake + 1 << " of " << maxStepRetakes
+                << "): " << stepFailure.c_str() << ", in the step from t = "
+                << stepStart.value << " with deltaT = " << failedDeltaT
+                << "; taken again with deltaT = " << runTime.deltaTValue()
+                << nl << endl;
         }
 
         const scalar granularVolume =
