@@ -78,7 +78,10 @@ def _say(args: argparse.Namespace) -> Callable[[str], None]:
 
 @contextlib.contextmanager
 def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
-    """Return a progress bar on a terminal (simulated time, dt, Courant, ETA); None otherwise."""
+    """Return a progress bar on a terminal (simulated time, dt, Courant, steps retaken, ETA).
+
+    None where there is no terminal.
+    """
     if getattr(args, "json", False) or getattr(args, "quiet", False) or not sys.stderr.isatty():
         yield None
         return
@@ -90,6 +93,7 @@ def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
         TextColumn("t = {task.fields[t]:.4g} / {task.total:.4g} s"),
         TextColumn("dt {task.fields[dt]:.2e}"),
         TextColumn("Co {task.fields[co]:.2f} (grains {task.fields[gco]:.2f})"),
+        TextColumn("{task.fields[retaken]}"),
         TimeRemainingColumn(),
         console=_console(stderr=True),
         transient=True,
@@ -105,11 +109,16 @@ def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
         now = time.monotonic()
         if now - state["last"] < 0.2:
             return
+        if not monitor.steps:  # the first step, taken again
+            return
         state["last"] = now
         s = monitor.steps[-1]
+        n = len(monitor.retakes)
         if state["task"] is None:
             prog.start()
-            state["task"] = prog.add_task("run", total=end_time, t=0.0, dt=0.0, co=0.0, gco=0.0)
+            state["task"] = prog.add_task(
+                "run", total=end_time, t=0.0, dt=0.0, co=0.0, gco=0.0, retaken=""
+            )
         prog.update(
             state["task"],
             completed=s.time,
@@ -117,6 +126,7 @@ def _progress(args: argparse.Namespace) -> Iterator[Callable[..., None] | None]:
             dt=s.delta_t,
             co=s.courant,
             gco=s.granular_courant,
+            retaken=f"{n} step{'s' if n != 1 else ''} retaken" if n else "",
         )
 
     try:
