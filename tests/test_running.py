@@ -352,6 +352,23 @@ def test_a_step_cap_put_back_while_running_is_read_by_the_solver(tmp_path, solve
     assert max(dt for t, dt in steps if t > 0.035) > 2 * small
 
 
+def test_no_step_is_retaken_in_the_start_up_of_a_scene_that_iterates(tmp_path, openfoam):
+    # (docs/solver.md: retaken there, the two-angle hopper's start-up crawled
+    # and the 3D thin lateral silo did not finish; the runner iterates it)
+    from foamsilo.case import create_case
+
+    wedge = load_preset("zhou-cyl-bottom", ["mesh.cells_across=16"])
+    w = create_case(wedge, tmp_path / "wedge", openfoam).path
+    assert wedge.outer_correctors > 1
+    retake_from = float(dict_value(w / "system" / "controlDict", "retakeFrom"))
+    assert retake_from == pytest.approx(wedge.discharge_time_scale, rel=1e-9)
+    assert int(dict_value(w / "system" / "controlDict", "maxStepRetakes")) == 4
+    planar = load_preset("zhou-planar", ["mesh.cells_across=16"])
+    assert planar.outer_correctors == 1
+    p = create_case(planar, tmp_path / "planar", openfoam).path
+    assert float(dict_value(p / "system" / "controlDict", "retakeFrom")) == 0.0
+
+
 def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
     # with the iterations already raised, a recovery caps the step at half
     # the one the run diverged with (no solver run: the case's files)

@@ -25,6 +25,13 @@ RETAKE_ALPHA_EXCURSION = 0.5
 #: ... or when the step ends with a Courant number this many times its limit
 #: (the controller never grows the step by more than 1.2 per step)
 RETAKE_COURANT_FACTOR = 20.0
+#: ... but not in the start-up (the first this many discharge times sqrt(D/g):
+#: the steady window's start-up, ``foamsilo.post.steady.START``) of a scene
+#: that iterates each step: a failed step there is the mu(I) Picard iteration
+#: not converging along the start-up's path, which a retake does not cure (the
+#: start-up then crawls at small steps); the runner's recovery iterates the
+#: start-up again from the last written time (docs/solver.md)
+RETAKE_AFTER_START = 1.0
 
 #: Templates every case gets, by representation (a scene gets what it needs)
 _COMMON = [
@@ -133,6 +140,9 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "friction_relaxation": scene.numerics.friction_relaxation,
         "retake_alpha_excursion": RETAKE_ALPHA_EXCURSION,
         "retake_courant_factor": RETAKE_COURANT_FACTOR,
+        "retake_from": RETAKE_AFTER_START * scene.discharge_time_scale
+        if scene.outer_correctors > 1
+        else 0.0,
     }
 
 

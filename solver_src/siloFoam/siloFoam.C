@@ -33,8 +33,9 @@ Description
     - A step whose outer iterations diverge (the volume fraction far
       outside [0, 1] after an advection, or a Courant number blown up at
       the step's end) is taken again from its start with half the step, up
-      to maxStepRetakes times, then the run stops with a FatalError naming
-      the field and the time (createStepRetake.H, siloTime.H).
+      to maxStepRetakes times (none in the start-up of a scene that
+      iterates each step, retakeFrom), then the run stops with a FatalError
+      naming the field and the time (createStepRetake.H, siloTime.H).
     - A static mesh; no MRF, no LTS.
 
     Incompressible, isothermal; the granular phase keeps a constant
@@ -222,6 +223,15 @@ int main(int argc, char *argv[])
             }
 
             const scalar failedDeltaT = runTime.deltaTValue();
+            if (stepStart.value < retakeFrom)
+            {
+                FatalErrorInFunction
+                    << "Step diverged: " << stepFailure.c_str()
+                    << ", in the step from t = " << stepStart.value
+                    << " with deltaT = " << failedDeltaT << ", in the start-up"
+                    << " (no retake before t = " << retakeFrom << ")"
+                    << exit(FatalError);
+            }
             if (retake >= maxStepRetakes)
             {
                 FatalErrorInFunction
