@@ -158,3 +158,15 @@ def test_a_floating_point_trap_is_a_divergence_the_runner_can_recover():
     mon.feed("#1  Foam::sigFpe::sigHandler(int) at ??:?")
     assert mon.divergence is not None and mon.divergence.quantity == "floating-point exception"
     assert mon.fatal  # the stack is kept for the report
+
+
+def test_a_collapsed_step_is_a_divergence_and_the_run_s_largest_step_is_kept():
+    # retakes in consecutive steps can drive the step far down; the recovery
+    # caps at half the run's largest step, not at half the collapsed one
+    mon = LogMonitor(0.5, 0.5)
+    feed_steps(mon, 30, dt=1e-3)
+    assert mon.divergence is None and mon.largest_step == 1e-3
+    feed_steps(mon, 2, dt=5e-8)
+    d = mon.divergence
+    assert d is not None and d.quantity == "deltaT" and "collapsed" in d.detail
+    assert mon.largest_step == 1e-3

@@ -154,6 +154,11 @@ class LogMonitor:
         self._attempt_alpha_max = -math.inf
 
     @property
+    def largest_step(self) -> float:
+        """The largest time step of the run after its first five steps [s] (0: none yet)."""
+        return self._max_dt
+
+    @property
     def alpha_max(self) -> float:
         """The largest volume fraction the solver reported in the steps it kept.
 

@@ -405,9 +405,15 @@ def run_solver(
     if monitor.divergence is not None:
         d = monitor.divergence
         good = time_directories(case)
-        # the step before the one that blew up (its own step may be NaN)
+        # the step before the one that blew up (its own step may be NaN); for
+        # a collapsed step, the largest step of the run: the solver's retakes
+        # halve the step of each failed step, and a run of them in consecutive
+        # steps ends far below the step the run was taking (a recovery capping
+        # at half of that never got through its discharge: docs/solver.md)
         steps = [s.delta_t for s in monitor.steps[-3:] if math.isfinite(s.delta_t)]
         dt = min(steps) if steps else None
+        if d.quantity == "deltaT" and monitor.largest_step > 0:
+            dt = monitor.largest_step
         raise DivergenceError(d.quantity, d.time, d.detail, good[-1] if good else None, case, dt)
     if monitor.fatal or not monitor.end_seen:
         text = "\n".join(monitor.fatal) or "the solver ended without 'End'"
