@@ -233,6 +233,7 @@ def _recover(
     scene: Scene,
     say: Say,
     iterations_failed: bool = False,
+    start_up_released: float | None = None,
 ) -> dict[str, Any]:
     """Set a diverged case back to its latest complete time with more care per step.
 
@@ -244,7 +245,9 @@ def _recover(
     ``RECOVERY_STEP_FACTOR`` times the step it was taking (``maxDeltaT``),
     with the scene's own iterations back where the raised ones diverged
     (``iterations_failed``: they did so earlier in this run, and are not
-    raised again). A scene with one evaluation of
+    raised again). A restart that goes back to before ``start_up_released``
+    (where an earlier recovery's start-up iterations were put back, the
+    start-up passed) iterates again to that time as well. A scene with one evaluation of
     the viscosity per step (planar) keeps it: made a Picard iteration, it
     diverges within the step at high viscosity contrast (D/d = 5, measured).
     ``controlDict`` is made modifiable at run time (with no modification
@@ -277,6 +280,18 @@ def _recover(
         )
     if exc.time is not None:
         remove_times_from(case_dir, exc.time)
+    restart = inspect(case_dir).latest_time or "0"
+    # a restart back into the start-up repeats the start-up's cure, if an
+    # earlier recovery's raised iterations got the run through it
+    again = (
+        start_up_released is not None
+        and float(restart) < start_up_released
+        and new_outer < RECOVERY_OUTER_CORRECTORS
+        and not (iterations_failed or blew_up)
+    )
+    if again:
+        new_outer = RECOVERY_OUTER_CORRECTORS
+        how += f", {outer_iterations(new_outer)} per step to t = {start_up_released:.6g} s"
     with edit_dict(control) as cd:
         cd["maxDeltaT"] = new_cap
         cd["deltaT"] = min(float(cd["deltaT"]), new_cap)
@@ -284,7 +299,6 @@ def _recover(
     if new_outer != outer:
         with edit_dict(solution) as sd:
             sd["PIMPLE"]["nOuterCorrectors"] = new_outer
-    restart = inspect(case_dir).latest_time or "0"
     line = (
         f"foamsilo: recovery {k} of {scene.run.max_recoveries}: {exc.quantity} diverged at "
         f"t = {exc.time} s with steps of {step:.3g} s; restarting from t = {restart} s with "
@@ -300,6 +314,8 @@ def _recover(
         "max_delta_t": new_cap,
         "outer_correctors": new_outer,
         "iterations_blew_up": blew_up,
+        "start_up_again": again,
+        "start_up_until": start_up_released if again else None,
     }
 
 
@@ -318,8 +334,18 @@ def _plan_release(
     """Plan to put the scene's step cap and iterations back (None: kept to the end).
 
     A run that diverged again after they were put back keeps its recovery's
-    settings to the end.
+    settings to the end, but for the start-up's iterations, which a restart
+    back into the start-up raised again: they go back where they did before.
     """
+    if record.get("start_up_again"):
+        at = record["start_up_until"]
+        line = (
+            f"foamsilo: {outer_iterations(scene.outer_correctors)} per step again past "
+            f"t = {at:.6g} s; the step cap is kept to the end"
+        )
+        _say_and_log(case_dir, line, say)
+        record["release_time"] = at
+        return StepRelease(at, record["max_delta_t"], scene.outer_correctors)
     if released_before:
         line = (
             "foamsilo: it diverged after its step settings were put back: the recovery's "
@@ -433,7 +459,17 @@ def run(
                             recoveries=recoveries, **spent())  # fmt: skip
                     raise
                 failed = any(r.get("iterations_blew_up") for r in recoveries)
-                recoveries.append(_recover(case_dir, exc, len(recoveries) + 1, scene, say, failed))
+                # where an earlier recovery's start-up iterations were put back
+                start_up = [
+                    r["release_time"]
+                    for r in recoveries
+                    if r["outer_correctors"] == RECOVERY_OUTER_CORRECTORS
+                    and r.get("released_at") is not None
+                ]
+                recoveries.append(
+                    _recover(case_dir, exc, len(recoveries) + 1, scene, say, failed,
+                             start_up[0] if start_up else None)
+                )  # fmt: skip
                 recoveries[-1]["after_wall_seconds"] = time.perf_counter() - wall0
                 release = _plan_release(recoveries[-1], scene, released_before, case_dir, say)
             except RunInterruptedError as exc:

@@ -7,7 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from foamsilo.case.times import RESTART_FIELDS, prune_incomplete_times, time_directories
+from foamsilo.case.times import (
+    RESTART_FIELDS,
+    prune_incomplete_times,
+    prune_times_past_step_rows,
+    time_directories,
+)
 from foamsilo.errors import SceneError
 from foamsilo.run.runner import _all_local
 from foamsilo.sweep import load_sweep
@@ -59,6 +64,34 @@ def test_a_decomposed_time_counts_only_when_every_rank_has_it(tmp_path):
     prune_incomplete_times(case)
     for rank in (0, 1):
         assert sorted(p.name for p in (case / f"processor{rank}").iterdir()) == ["0.1"]
+
+
+def write_rows(case: Path, name: str, start: str, times: list[float]) -> None:
+    """A per-step function-object table as OpenFOAM writes it (header, time first)."""
+    table = case / "postProcessing" / name / start / "surfaceFieldValue.dat"
+    table.parent.mkdir(parents=True, exist_ok=True)
+    rows = "".join(f"{t:.8g}\t{0.1 * t:.6g}\n" for t in times)
+    table.write_text("# Time    \tsum(phi)\n" + rows)
+
+
+def test_a_time_written_before_its_step_s_rows_is_not_a_restart_point(tmp_path):
+    # the kill came after 0.2 was written whole but before the function
+    # objects ran for its step (they run at the next step's start): a
+    # restart from 0.2 would leave that step out of the tables for good
+    case = make_case(tmp_path)
+    for t in ("0.1", "0.2"):
+        write_time(case, t)
+    write_rows(case, "orificeFlow", "0", [0.05, 0.1, 0.15, 0.1975])
+    write_rows(case, "granularVolume", "0", [0.05, 0.1, 0.15, 0.1975])
+    assert prune_times_past_step_rows(case) == ["0.2"]
+    assert time_directories(case) == ["0", "0.1"]
+    # rows up to the written time (or past it): nothing removed; the
+    # latest restart's table is the one read
+    write_time(case, "0.2")
+    write_rows(case, "orificeFlow", "0.1", [0.1, 0.15, 0.2])
+    write_rows(case, "granularVolume", "0.1", [0.1, 0.15, 0.2, 0.205])
+    assert prune_times_past_step_rows(case) == []
+    assert time_directories(case) == ["0", "0.1", "0.2"]
 
 
 def test_hostfiles_naming_only_this_machine_are_local(tmp_path):

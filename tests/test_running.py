@@ -204,6 +204,30 @@ def test_a_step_whose_iterations_blow_up_is_taken_again_by_the_solver(tmp_path, 
     assert "taken again" in (case / "report.md").read_text()
 
 
+def test_retakes_are_bounded_per_discharge_time_then_the_runner_caps_the_step(tmp_path, solver):
+    # the same unstable scene with one retake allowed per discharge time: the
+    # first blow-up (t = 0.0044 s) is retaken, the next one within the same
+    # discharge time stops the solver, and the runner restarts it from its
+    # last written time with the step capped at half the step the run was
+    # taking when its trouble began (the retaken step's failed one), not at
+    # half the smaller steps the retake left
+    case = tmp_path / "budget"
+    code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
+                  *sets(["numerics.outer_correctors=1", "run.end_time=0.015", LAGGED,
+                         "run.write_interval=0.005", "run.max_recoveries=2",
+                         "run.max_step_retakes=1"]))  # fmt: skip
+    assert code == 0, s
+    log = (case / "log.siloFoam").read_text().splitlines()
+    first = next(i for i, line in enumerate(log) if line.startswith("Step retaken (1 of 1)"))
+    failed_step = float(log[first].split("with deltaT = ")[1].split(";")[0])
+    stop = next(line for line in log[first:] if line.startswith("Step diverged"))
+    assert "after 1 retakes since t = " in stop, stop
+    recovery = s["run"]["recoveries"][0]
+    assert recovery["delta_t"] == pytest.approx(failed_step, rel=1e-9), (recovery, failed_step)
+    assert recovery["max_delta_t"] == pytest.approx(0.5 * failed_step, rel=1e-9)
+    assert s["mass_balance_rel_error"] < 1e-8
+
+
 SWEEP = """
 base = "zhou-planar"
 name = "orifice"
@@ -410,6 +434,21 @@ def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
     rec = _recover(w2, DivergenceError("Courant number", late, "", None, w2, 1e-3), 1, wedge,
                    lambda _: None)  # fmt: skip
     assert rec["outer_correctors"] == 3 and rec["max_delta_t"] == pytest.approx(5e-4)
+    # ... and one whose restart goes back into the start-up (the last written
+    # time is 0) iterates the start-up again up to where an earlier
+    # recovery's iterations were put back; the step cap stays to the end
+    from foamsilo.pipeline import _plan_release
+
+    until = 1.02 * wedge.discharge_time_scale
+    w3 = create_case(wedge, tmp_path / "again", openfoam).path
+    rec = _recover(w3, DivergenceError("volume fraction", late, "", None, w3, 1e-3), 2, wedge,
+                   lambda _: None, start_up_released=until)  # fmt: skip
+    assert rec["start_up_again"] and rec["outer_correctors"] == 8
+    assert rec["max_delta_t"] == pytest.approx(5e-4)
+    assert int(dict_value(w3 / "system" / "fvSolution", "PIMPLE")["nOuterCorrectors"]) == 8
+    release = _plan_release(rec, wedge, True, w3, lambda _: None)
+    assert release is not None and release.time == until
+    assert release.outer_correctors == 3 and release.max_delta_t == pytest.approx(5e-4)
 
 
 def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, solver):

@@ -42,6 +42,7 @@ from foamsilo.case.templates import (
 from foamsilo.case.times import (
     processor_dirs,
     prune_incomplete_times,
+    prune_times_past_step_rows,
     time_directories,
 )
 
@@ -64,6 +65,7 @@ __all__ = [
     "lock_holder",
     "processor_dirs",
     "prune_incomplete_times",
+    "prune_times_past_step_rows",
     "read_metadata",
     "read_run_record",
     "rebuild_mesh",

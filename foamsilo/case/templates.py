@@ -32,6 +32,13 @@ RETAKE_COURANT_FACTOR = 20.0
 #: start-up then crawls at small steps); the runner's recovery iterates the
 #: start-up again from the last written time (docs/solver.md)
 RETAKE_AFTER_START = 1.0
+#: The solver's retakes (``run.max_step_retakes``) are counted over this many
+#: discharge times, not per step: a retake that fixes the failed step but
+#: leaves a field it cannot heal fails the steps after it, each retaken at a
+#: smaller step (the 3D thin lateral silo crawled on at 1/100 of its step);
+#: past the budget the run stops and the runner restarts it from the last
+#: written time with its step capped (docs/solver.md)
+RETAKE_WINDOW = 1.0
 
 #: Templates every case gets, by representation (a scene gets what it needs)
 _COMMON = [
@@ -140,6 +147,7 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "friction_relaxation": scene.numerics.friction_relaxation,
         "retake_alpha_excursion": RETAKE_ALPHA_EXCURSION,
         "retake_courant_factor": RETAKE_COURANT_FACTOR,
+        "retake_window": RETAKE_WINDOW * scene.discharge_time_scale,
         "retake_from": RETAKE_AFTER_START * scene.discharge_time_scale
         if scene.outer_correctors > 1
         else 0.0,

@@ -107,6 +107,54 @@ def prune_incomplete_times(case: Path) -> list[str]:
     return removed
 
 
+#: Function objects that write a row every step (templates/system/controlDict)
+#: and that the mass balance reads. OpenFOAM runs them after the step's write,
+#: at the next step's start (``Time::run``): a run killed in between leaves a
+#: complete time whose step has no row, and a restart from it never adds one
+STEP_ROW_TABLES = ("orificeFlow", "granularVolume")
+
+
+def last_step_row(case: Path, name: str) -> float | None:
+    """Time of the last row of ``postProcessing/<name>`` (its latest restart's table).
+
+    None when the case has no such table or it holds no row yet.
+    """
+    root = Path(case) / "postProcessing" / name
+    starts = time_dirs(root)
+    for start in reversed(starts):
+        tables = sorted(start.glob("*.dat"), key=lambda f: f.stat().st_mtime)
+        if not tables:
+            continue
+        for line in reversed(tables[-1].read_text(errors="replace").splitlines()):
+            words = line.split()
+            if words and not words[0].startswith("#"):
+                try:
+                    return float(words[0])
+                except ValueError:
+                    return None  # a row cut off by the kill: no verdict
+        return None
+    return None
+
+
+def prune_times_past_step_rows(case: Path) -> list[str]:
+    """Remove the latest times whose step the function objects have no row for.
+
+    A restart from such a time would leave a gap in the per-step tables (the
+    mass balance and Q read them), so the time before is restarted from
+    instead. Returns the names removed.
+    """
+    removed: list[str] = []
+    while True:
+        times = [float(t) for t in time_directories(case)]
+        latest = max(times, default=0.0)
+        if latest <= 0:
+            return removed
+        rows = [last_step_row(case, n) for n in STEP_ROW_TABLES]
+        if all(t is None or t >= latest * (1 - 1e-6) for t in rows):
+            return removed
+        removed += remove_times_from(case, latest)
+
+
 #: Fields whose values a restart takes over; a NaN or Inf in one poisons the run
 CHECKED_FIELDS = ("U", "p_rgh", "alpha.granular")
 #: Suffix of a time directory set aside because its fields hold NaN or Inf

@@ -29,7 +29,13 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from foamsilo.case import SCENE_FILE, decompose_dict, processor_dirs, prune_incomplete_times
+from foamsilo.case import (
+    SCENE_FILE,
+    decompose_dict,
+    processor_dirs,
+    prune_incomplete_times,
+    prune_times_past_step_rows,
+)
 from foamsilo.case.times import (
     latest_processor_time,
     latest_root_time,
@@ -306,6 +312,8 @@ def run_solver(
     if hostfile is not None and not Path(hostfile).is_file():
         raise UsageError("--hostfile", f"{hostfile}: no such file")
     prune_incomplete_times(case)
+    # a time written just before a kill, its step's function-object rows not yet
+    prune_times_past_step_rows(case)
     # a restart from NaN fields dies in a floating-point trap naming no file
     set_aside_nonfinite_times(case)
     prepare_decomposition(case, of, n_procs)
@@ -414,6 +422,17 @@ def run_solver(
         dt = min(steps) if steps else None
         if d.quantity == "deltaT" and monitor.largest_step > 0:
             dt = monitor.largest_step
+        # the solver's retakes spent within its window: the largest step that
+        # failed there, the one the run was taking when its trouble began
+        # (the steps since were halved by the retakes)
+        window = float(dict_value(control, "retakeWindow", 0.0))
+        failed = [
+            float(r["delta_t"])
+            for r in monitor.retakes
+            if d.time is None or float(r["time"]) > d.time - window
+        ]
+        if failed and d.quantity in ("volume fraction", "Courant number"):
+            dt = max(failed)
         raise DivergenceError(d.quantity, d.time, d.detail, good[-1] if good else None, case, dt)
     if monitor.fatal or not monitor.end_seen:
         text = "\n".join(monitor.fatal) or "the solver ended without 'End'"

@@ -425,10 +425,11 @@ class Run:
         default=3,
     )
     max_step_retakes: int = _f(
-        "times the solver takes a step again from its start with half the step when its "
-        "outer iterations diverge (the volume fraction leaves [-0.5, 1.5] or the Courant "
-        "number reaches 20 times its limit; not in the first discharge time of a scene that "
-        "iterates each step), before the run stops (then run.max_recoveries applies)",
+        "times, within any one discharge time sqrt(D/g), the solver takes a step again from "
+        "its start with half the step when its outer iterations diverge (the volume fraction "
+        "leaves [-0.5, 1.5] or the Courant number reaches 20 times its limit; not in the first "
+        "discharge time of a scene that iterates each step), before the run stops (then "
+        "run.max_recoveries applies)",
         ge=0,
         le=10,
         default=4,

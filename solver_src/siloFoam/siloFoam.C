@@ -33,9 +33,10 @@ Description
     - A step whose outer iterations diverge (the volume fraction far
       outside [0, 1] after an advection, or a Courant number blown up at
       the step's end) is taken again from its start with half the step, up
-      to maxStepRetakes times (none in the start-up of a scene that
-      iterates each step, retakeFrom), then the run stops with a FatalError
-      naming the field and the time (createStepRetake.H, siloTime.H).
+      to maxStepRetakes times within any retakeWindow of simulated time
+      (none in the start-up of a scene that iterates each step, retakeFrom),
+      then the run stops with a FatalError naming the field and the time
+      (createStepRetake.H, siloTime.H).
     - A static mesh; no MRF, no LTS.
 
     Incompressible, isothermal; the granular phase keeps a constant
@@ -138,7 +139,7 @@ int main(int argc, char *argv[])
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
         const siloTime::stepStart stepStart(runTime.start());
-        for (label retake = 0; ; ++retake)
+        for (;;)
         {
             ++runTime;
 
@@ -232,15 +233,31 @@ int main(int argc, char *argv[])
                     << " (no retake before t = " << retakeFrom << ")"
                     << exit(FatalError);
             }
-            if (retake >= maxStepRetakes)
+            // the retakes of the last retakeWindow, this step's included
+            {
+                label kept = 0;
+                forAll(retakeTimes, i)
+                {
+                    if (retakeTimes[i] > stepStart.value - retakeWindow)
+                    {
+                        retakeTimes[kept++] = retakeTimes[i];
+                    }
+                }
+                retakeTimes.setSize(kept);
+            }
+            if (retakeTimes.size() >= maxStepRetakes)
             {
                 FatalErrorInFunction
                     << "Step diverged: " << stepFailure.c_str()
                     << ", in the step from t = " << stepStart.value
                     << " with deltaT = " << failedDeltaT << ", after "
-                    << retake << " retakes"
+                    << retakeTimes.size() << " retakes since t = "
+                    << (retakeTimes.empty() ? stepStart.value : retakeTimes[0])
+                    << " (at most " << maxStepRetakes << " within "
+                    << retakeWindow << " s)"
                     << exit(FatalError);
             }
+            retakeTimes.append(stepStart.value);
 
             restoreStepStart();
             runTime.rewind(stepStart);
@@ -249,7 +266,7 @@ int main(int argc, char *argv[])
             {
                 faceSmoothingStep = runTime.deltaTValue();
             }
-            Info<< "Step retaken (" << retake + 1 << " of " << maxStepRetakes
+            Info<< "Step retaken (" << retakeTimes.size() << " of " << maxStepRetakes
                 << "): " << stepFailure.c_str() << ", in the step from t = "
                 << stepStart.value << " with deltaT = " << failedDeltaT
                 << "; taken again with deltaT = " << runTime.deltaTValue()
