@@ -303,7 +303,10 @@ def test_ctrl_c_during_meshing_stops_at_once_and_leaves_nothing(tmp_path, openfo
     # a 3D mesh of ~400k cells takes gmsh several seconds
     args = ["new", "zhou-cyl-lateral", "-o", str(tmp_path / "c"), "--set", "mesh.cells_across=40"]
     p = start(args)
-    time.sleep(2.0)
+    # once meshing has begun (the temporary case is made just before), not
+    # while the interpreter is still importing (seen under load: exit 1)
+    wait_for(lambda: any(tmp_path.glob(".c.foamsilo-tmp-*")), what="the temporary case")
+    time.sleep(1.0)
     t0 = time.monotonic()
     os.killpg(p.pid, signal.SIGINT)
     p.communicate(timeout=60)
