@@ -8,11 +8,20 @@ with ``-m "not openfoam"`` for a quick unit-test pass.
 
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import pytest
 
 from foamsilo.scene import Scene, load_preset
+
+# The tests send SIGINT as a terminal's Ctrl-C does. A test run started in the
+# background of a non-interactive shell (`bash .ci/run &`) has SIGINT
+# ignored, and an ignored signal stays ignored in every child: the command
+# under test would never see it (seen: exit 1 instead of 130, a driver that
+# did not stop). A handled one is reset to the default in the children.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
