@@ -807,7 +807,7 @@ def _bench_out(args: argparse.Namespace, res: dict[str, Any], text: str, name: s
 
 def cmd_bench_validation(args: argparse.Namespace) -> int:
     """Return the validation suite (checks with tolerances; exit 1 when one fails)."""
-    from foamsilo.studies.suite import rewrite_report, run_suite
+    from foamsilo.studies.suite import longest_wall_limit, rewrite_report, run_suite
 
     if args.report_only:
         res = rewrite_report(args.quick, Path(args.output))
@@ -820,8 +820,9 @@ def cmd_bench_validation(args: argparse.Namespace) -> int:
                 raise UsageError(
                     "--work-dir", "required with --backend slurm: a directory the nodes share"
                 )
-            # the job's limit: the solver's wall limit, and time to mesh and reduce
-            minutes = str(int(math.ceil(args.time_limit / 60.0)) + 10)
+            # the job's limit: the longest wall limit of a case (a preset's own
+            # can exceed --time-limit), and time to mesh and reduce
+            minutes = str(int(math.ceil(longest_wall_limit(args.time_limit) / 60.0)) + 10)
             jobs = SlurmBackend(_slurm_options(args, time_limit=minutes), say=_say(args))
         with _work_dir(args, "foamsilo-suite-") as work:
             res = run_suite(
@@ -1255,7 +1256,12 @@ def build_parser() -> argparse.ArgumentParser:
     sp.add_argument("--quick", action="store_true", help="the reduced suite (bash scripts/test)")
     sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
     sp.add_argument("--jobs", type=int, default=2, help="cases run at once")
-    sp.add_argument("--time-limit", type=float, default=900.0, help="wall seconds per case")
+    sp.add_argument(
+        "--time-limit",
+        type=float,
+        default=900.0,
+        help="wall seconds per case (a preset's own longer limit in suite.toml applies to it)",
+    )
     sp.add_argument("-o", "--output", default="docs/validation", help="report directory")
     sp.add_argument("--work-dir", help="keep the cases here")
     sp.add_argument("--quiet", action="store_true", help="no per-case messages")
@@ -1269,7 +1275,7 @@ def build_parser() -> argparse.ArgumentParser:
         choices=["local", "slurm"],
         default="local",
         help="local: --jobs cases at a time here; slurm: one batch job per case (with "
-        "--work-dir on a shared filesystem; each job's --time is --time-limit + 10 min)",
+        "--work-dir on a shared filesystem; each job's --time is the longest case limit + 10 min)",
     )
     slurm_args(sp, time_limit=False)
 

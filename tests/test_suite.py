@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -270,3 +272,26 @@ def test_a_stiff_case_that_diverges_fails_its_check():
     assert by_name["wedge: steady at its defaults"].passed
     assert not by_name["thin, closed top: steady at its defaults"].passed
     assert not by_name["thin, open top: steady at its defaults"].passed
+
+
+def test_a_preset_s_own_wall_limit_extends_the_suite_s_and_is_checked():
+    from foamsilo.errors import SceneError
+    from foamsilo.scene import preset_names
+    from foamsilo.studies.cases import StudyCase, study_table, wall_limits
+    from foamsilo.studies.suite import longest_wall_limit
+
+    own = wall_limits(study_table("suite")["presets"], "presets", preset_names())
+    assert own, "suite.toml [presets] wall_limits is empty"
+    name, seconds = next(iter(own.items()))
+    # the larger of the two applies, and no limit stays no limit
+    case = StudyCase(name, name, [], wall_limit=seconds)
+    assert case.spec(Path("c"), 60.0).max_wall_seconds == seconds
+    assert case.spec(Path("c"), 2 * seconds).max_wall_seconds == 2 * seconds
+    assert case.spec(Path("c"), None).max_wall_seconds is None
+    assert StudyCase("x", name, []).spec(Path("c"), 60.0).max_wall_seconds == 60.0
+    # a batch job's --time covers the longest
+    assert longest_wall_limit(60.0) == max(own.values())
+    with pytest.raises(SceneError, match=r"presets\.wall_limits\.nope: unknown case; allowed"):
+        wall_limits({"wall_limits": {"nope": 10}}, "presets", preset_names())
+    with pytest.raises(SceneError, match=r"wall_limits\.zhou-planar: got -1; allowed: wall"):
+        wall_limits({"wall_limits": {"zhou-planar": -1}}, "presets", preset_names())

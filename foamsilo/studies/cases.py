@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from foamsilo.errors import SceneError
 from foamsilo.pipeline import Backend, Budget, CaseSpec, LocalBackend, Outcome
 from foamsilo.post.steady import STEP_SWING_WARNING
 from foamsilo.run import STEP_TABLE
@@ -61,15 +62,23 @@ def pick(entry: dict[str, Any], key: str, quick: bool) -> Any:
 
 @dataclass
 class StudyCase:
-    """One case of a study: a label, a preset and its overrides."""
+    """One case of a study: a label, a preset and its overrides.
+
+    ``wall_limit`` (s) is the case's own wall-time limit, for a case the
+    study's data says needs more than the study's per-case limit; the larger
+    of the two applies.
+    """
 
     label: str
     preset: str
     sets: list[str] = field(default_factory=list)
+    wall_limit: float | None = None
 
     def spec(self, case_dir: Path, limit: float | None) -> CaseSpec:
         """Return the pipeline's spec: written afresh (a study never reuses an old case)."""
         load_preset(self.preset, self.sets)  # bad study data fails before anything runs
+        if limit is not None and self.wall_limit is not None:
+            limit = max(limit, self.wall_limit)
         return CaseSpec(
             case_dir=case_dir,
             scene=self.preset,
@@ -78,6 +87,25 @@ class StudyCase:
             max_wall_seconds=limit,
             label=self.label,
         )
+
+
+def wall_limits(table: dict[str, Any], where: str, names: list[str]) -> dict[str, float]:
+    """Return a study table's ``wall_limits`` (case name -> s), checked against ``names``.
+
+    Raises
+    ------
+    SceneError
+        A name that is not one of ``names``, or a limit that is not a number > 0.
+    """
+    out: dict[str, float] = {}
+    for name, value in (table.get("wall_limits") or {}).items():
+        field_name = f"{where}.wall_limits.{name}"
+        if name not in names:
+            raise SceneError(field_name, f"unknown case; allowed: {', '.join(names)}")
+        if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+            raise SceneError(field_name, f"got {value!r}; allowed: wall seconds > 0")
+        out[name] = float(value)
+    return out
 
 
 def _outcome_words(o: Outcome) -> tuple[str, str]:

@@ -64,6 +64,7 @@ from foamsilo.studies.cases import (
     run_rows,
     study_table,
     summary_fields,
+    wall_limits,
 )
 
 Row = dict[str, Any]
@@ -411,7 +412,8 @@ def presets(
 
     entry = study_table("suite")["presets"]
     names = [only] if only else (entry["quick"] if quick else preset_names())
-    cases = [StudyCase(n, n, []) for n in names]
+    own = wall_limits(entry, "suite.toml presets", preset_names())
+    cases = [StudyCase(n, n, [], wall_limit=own.get(n)) for n in names]
     rows = run_rows(cases, work / ("presets" if only is None else f"presets-{only}"), jobs,
                     limit, on_row)  # fmt: skip
     for r in rows:
@@ -420,6 +422,18 @@ def presets(
         r["scheme"] = scene.stress_pressure_coupling
         r["flow_rate_scale"] = scene.flow_rate_scale[0]
     return {"rows": rows}
+
+
+def longest_wall_limit(limit: float) -> float:
+    """Return the longest wall-time limit a case of the suite runs under (s).
+
+    ``limit`` is the suite's per-case limit; a preset's own ``wall_limits``
+    can be longer (a batch job's ``--time`` must cover it).
+    """
+    from foamsilo.scene import preset_names
+
+    own = wall_limits(study_table("suite")["presets"], "suite.toml presets", preset_names())
+    return max([limit, *own.values()])
 
 
 # --------------------------------------------------------------------- suite
