@@ -448,6 +448,19 @@ ENTRIES: dict[str, Callable[..., dict[str, Any]]] = {
 }
 
 
+def _finest_common(names: list[str], wp: dict[str, Any]) -> tuple[str, float | None]:
+    """Return a name and Q_a / Q_b - 1 of two series at their finest common steady grid."""
+    a, b = (wp[n]["rows"] for n in names)
+    steady_b = {r["cells_across"]: r["Q"] for r in b if r["outcome"] == "steady"}
+    common = [r for r in a if r["outcome"] == "steady" and r["cells_across"] in steady_b]
+    what = f"{names[0]} / {names[1]} - 1"
+    if not common:
+        return f"{what} (no resolution steady in both)", None
+    n = max(r["cells_across"] for r in common)
+    q = next(r["Q"] for r in common if r["cells_across"] == n)
+    return f"{what}, {n} across", q / steady_b[n] - 1
+
+
 def checks(result: dict[str, Any]) -> list[Check]:
     """Return the suite's figures with their tolerances (``suite.toml`` ``[checks]``)."""
     tol = study_table("suite")["checks"]
@@ -475,6 +488,9 @@ def checks(result: dict[str, Any]) -> list[Check]:
                     r.get("flux_vs_volume_rel_diff"),
                 )
             )
+        pair = tol["three-d-axisymmetric"]["series"]
+        if all(n in wp for n in pair):  # full suite only
+            out.append(check("three-d-axisymmetric", *_finest_common(pair, wp)))
     bev = result.get("beverloo")
     if bev:
         out.append(
