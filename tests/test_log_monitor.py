@@ -142,6 +142,8 @@ def test_a_step_that_diverges_after_its_retakes_is_a_divergence():
     d = mon.divergence
     assert d is not None and d.quantity == "volume fraction" and "-3.1" in d.detail
     assert d.time == mon.steps[-1].time
+    # the solver's retake window ends at the start of the step it stopped in
+    assert mon.diverged_step_start == 0.002
     mon2 = LogMonitor(0.5, 0.5)
     feed_steps(mon2, 3)
     mon2.feed("--> FOAM FATAL ERROR: ")

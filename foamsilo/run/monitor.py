@@ -60,6 +60,7 @@ _RE_RETAKE = re.compile(
     + _FLOAT
 )
 _RE_STEP_DIVERGED = re.compile(r"^Step diverged: (volume fraction|Courant number) (.*)$")
+_RE_STEP_FROM = re.compile(r"in the step from t = " + _FLOAT)
 _RE_ALPHA = re.compile(
     r"^Phase-1 volume fraction = "
     + _FLOAT
@@ -150,6 +151,9 @@ class LogMonitor:
         #: the steps the solver took again, each with why (``detail``), its
         #: start ``time``, the step that failed and the one it was taken with
         self.retakes: list[dict[str, float | str]] = []
+        #: start of the step that ended the solver's retakes (``Step diverged``):
+        #: its retake window ends there
+        self.diverged_step_start: float | None = None
         self._alpha_max = -math.inf
         self._attempt_alpha_max = -math.inf
 
@@ -193,6 +197,8 @@ class LogMonitor:
             m = _RE_STEP_DIVERGED.match(line.strip())
             if m:
                 self._diverge(m.group(1), m.group(2))
+                start = _RE_STEP_FROM.search(m.group(2))
+                self.diverged_step_start = float(start.group(1)) if start else None
             if "sigFpe::sigHandler" in line:
                 # a floating-point trap is a blow-up the log had no line for
                 self._diverge("floating-point exception", "the solver stopped on SIGFPE")

@@ -424,12 +424,14 @@ def run_solver(
             dt = monitor.largest_step
         # the solver's retakes spent within its window: the largest step that
         # failed there, the one the run was taking when its trouble began
-        # (the steps since were halved by the retakes)
+        # (the steps since were halved by the retakes). The window ends where
+        # the solver's does, at the start of the step it stopped in.
         window = float(dict_value(control, "retakeWindow", 0.0))
+        end = monitor.diverged_step_start if monitor.diverged_step_start is not None else d.time
         failed = [
             float(r["delta_t"])
             for r in monitor.retakes
-            if d.time is None or float(r["time"]) > d.time - window
+            if end is None or float(r["time"]) > end - window
         ]
         if failed and d.quantity in ("volume fraction", "Courant number"):
             dt = max(failed)
