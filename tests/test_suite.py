@@ -308,7 +308,7 @@ def test_3d_and_axisymmetric_are_compared_at_their_finest_common_steady_grid():
             # 56 across is finest in 3D, but its axisymmetric twin is not steady
             "venier-test1-3d": series(
                 [(28, 4.6, "steady"), (40, 4.8, "steady"), (56, 4.9, "steady")]
-            ),  # fmt: skip
+            ),
             "venier-test1-axi": series(
                 [
                     (28, 4.5, "steady"),
@@ -316,7 +316,7 @@ def test_3d_and_axisymmetric_are_compared_at_their_finest_common_steady_grid():
                     (56, 4.9, "not steady"),
                     (80, 5.0, "steady"),
                 ]
-            ),  # fmt: skip
+            ),
         }
     }
     (c,) = [c for c in checks(result) if "venier-test1-3d" in c.name]

@@ -412,7 +412,7 @@ def presets(
 
     entry = study_table("suite")["presets"]
     names = [only] if only else (entry["quick"] if quick else preset_names())
-    own = wall_limits(entry, "suite.toml presets", preset_names())
+    own = preset_wall_limits()
     cases = [StudyCase(n, n, [], wall_limit=own.get(n)) for n in names]
     rows = run_rows(cases, work / ("presets" if only is None else f"presets-{only}"), jobs,
                     limit, on_row)  # fmt: skip
@@ -424,16 +424,20 @@ def presets(
     return {"rows": rows}
 
 
+def preset_wall_limits() -> dict[str, float]:
+    """Return the presets' own wall-time limits (``suite.toml`` [presets] ``wall_limits``)."""
+    from foamsilo.scene import preset_names
+
+    return wall_limits(study_table("suite")["presets"], "suite.toml presets", preset_names())
+
+
 def longest_wall_limit(limit: float) -> float:
     """Return the longest wall-time limit a case of the suite runs under (s).
 
     ``limit`` is the suite's per-case limit; a preset's own ``wall_limits``
     can be longer (a batch job's ``--time`` must cover it).
     """
-    from foamsilo.scene import preset_names
-
-    own = wall_limits(study_table("suite")["presets"], "suite.toml presets", preset_names())
-    return max([limit, *own.values()])
+    return max([limit, *preset_wall_limits().values()])
 
 
 # --------------------------------------------------------------------- suite
