@@ -53,7 +53,13 @@ def test_work_precision_extrapolates_and_projects_the_cost():
 
 def test_checks_flag_a_figure_outside_its_tolerance():
     rows = [
-        {"cells_across": n, "Q": q, "Q_dimensionless": qd, "flux_vs_volume_rel_diff": e}
+        {
+            "cells_across": n,
+            "Q": q,
+            "Q_dimensionless": qd,
+            "flux_vs_volume_rel_diff": e,
+            "outcome": "steady",
+        }  # fmt: skip
         for n, q, qd, e in (
             (36, 0.0254, 0.54, 0.001),
             (48, 0.0277, 0.59, 0.002),
@@ -79,6 +85,9 @@ def test_checks_flag_a_figure_outside_its_tolerance():
     # two estimates of one rate 3% apart: the check fails (tolerance 1%)
     assert not by_name["lab silo, 72 across: |Q flux / Q volume - 1|"].passed
     rows[-1]["Q"] = None  # a run that stopped has no rate: the check fails, not crashes
+    by_name = {c.name: c for c in checks(result)}
+    assert not by_name["lab silo: Q rises with resolution"].passed
+    rows[-1]["Q"], rows[-1]["outcome"] = 0.0301, "oscillating"  # rising, but no rate
     by_name = {c.name: c for c in checks(result)}
     assert not by_name["lab silo: Q rises with resolution"].passed
 
