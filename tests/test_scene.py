@@ -90,6 +90,8 @@ def test_pressure_floor_default_and_explicit():
         ("material.grain_diameter=0.03", "material.grain_diameter", "< silo.orifice_width"),
         ("numerics.rhie_chow_scale=2", "numerics.rhie_chow_scale", "< 2"),
         ("numerics.rhie_chow_scale=0", "numerics.rhie_chow_scale", "> 0"),
+        ("numerics.stress_pressure_divergence=1.5", "numerics.stress_pressure_divergence",
+         "<= 1"),
         ("numerics.face_smoothing=grid", "numerics.face_smoothing", "'courant'"),
         ("numerics.face_smoothing_courant=0", "numerics.face_smoothing_courant", "> 0"),
         ("numerics.face_smoothing_max_ratio=0.5", "numerics.face_smoothing_max_ratio", ">= 1"),

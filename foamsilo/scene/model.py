@@ -531,6 +531,17 @@ class Numerics:
         "docs/solver.md)",
         default=None,
     )
+    stress_pressure_divergence: float = _f(
+        "with the implicit stress-pressure coupling: the share of its divergence part (the "
+        "stress's change with the pressure, div(M dp), beside n.M.n in the Laplacian) "
+        "taken in the projection; 1: the whole linearisation, which bursts where the cells "
+        "beside a fine wedge's axis and wall switch between stuck and yielding "
+        "(docs/solver.md); no effect on a converged step",
+        "",
+        gt=0,
+        le=1,
+        default=0.75,
+    )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
         "latest pressure and strain rate; default: 1 planar, 3 axisymmetric and 3D (why: "
