@@ -534,9 +534,9 @@ class Numerics:
     stress_pressure_divergence: float = _f(
         "with the implicit stress-pressure coupling: the share of its divergence part (the "
         "stress's change with the pressure, div(M dp), beside n.M.n in the Laplacian) "
-        "taken in the projection; 1: the whole linearisation; 0.5 removes the bursts of "
-        "the plain law on the uniform 96-across lab silo but lets the thin silo swing "
-        "(docs/solver.md); no effect on a converged step",
+        "taken in the projection; 1: the whole linearisation; less: a diagnostic for "
+        "bursts in fine axisymmetric meshes, what each share does to which scene in "
+        "docs/solver.md; no effect on a converged step",
         "",
         gt=0,
         le=1,
