@@ -59,7 +59,7 @@ def test_checks_flag_a_figure_outside_its_tolerance():
             "Q_dimensionless": qd,
             "flux_vs_volume_rel_diff": e,
             "outcome": "steady",
-        }  # fmt: skip
+        }
         for n, q, qd, e in (
             (36, 0.0254, 0.54, 0.001),
             (48, 0.0277, 0.59, 0.002),
