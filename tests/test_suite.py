@@ -306,6 +306,31 @@ def test_a_preset_s_own_wall_limit_extends_the_suite_s_and_is_checked():
         wall_limits({"wall_limits": {"zhou-planar": -1}}, "presets", preset_names())
 
 
+def test_a_gas_lab_row_s_own_wall_limit_extends_the_suite_s_and_is_checked(monkeypatch):
+    """suite.toml [gas-lab] wall_limits: by row label, checked against the full entry's labels."""
+    from foamsilo.errors import SceneError
+    from foamsilo.studies.cases import study_table, wall_limits
+    from foamsilo.studies.suite import gas_lab_cases, gas_lab_wall_limits, longest_wall_limit
+
+    own = gas_lab_wall_limits()
+    assert own, "suite.toml [gas-lab] wall_limits is empty"
+    cases = {c.label: c for c in gas_lab_cases(quick=False)[0]}
+    for label, seconds in own.items():
+        assert cases[label].spec(Path("c"), 900.0).max_wall_seconds == seconds
+    # the other rows keep the suite's limit
+    plain = [c for label, c in cases.items() if label not in own]
+    assert plain and all(c.spec(Path("c"), 900.0).max_wall_seconds == 900.0 for c in plain)
+    # a batch job's --time covers it, whatever the presets' limits
+    monkeypatch.setattr("foamsilo.studies.suite.preset_wall_limits", dict)
+    assert longest_wall_limit(60.0) == max(own.values())
+    labels = list(cases)
+    with pytest.raises(
+        SceneError, match=r"gas-lab\.wall_limits\.d = 190 um: unknown case; allowed"
+    ):
+        wall_limits({"wall_limits": {"d = 190 um": 10}}, "gas-lab", labels)
+    assert study_table("suite")["gas-lab"]["wall_limits"] == own
+
+
 def test_3d_and_axisymmetric_are_compared_at_their_finest_common_steady_grid():
     def series(rows):
         return {"rows": [{"cells_across": n, "Q": q, "outcome": o} for n, q, o in rows]}

@@ -253,10 +253,31 @@ def gas_lab(
     D/2 above the orifice (Zhou's Fig. 6b), is the model's mechanism, which a
     run must obey.
     """
+    cases, keys = gas_lab_cases(quick)
+    rows = run_rows(cases, work / "gas-lab", jobs, limit, on_row)
+    for r, (d, q) in zip(rows, keys, strict=True):
+        r["grain_diameter"], r["q_air_lpm"] = d, q
+    data = {"rows": rows}
+    derive_gas_lab(data)
+    return data
+
+
+def gas_lab_cases(quick: bool) -> tuple[list[StudyCase], list[tuple[float, float | None]]]:
+    """Return the gas-lab cases, each with its own wall-time limit, and their keys."""
+    cases, keys = _gas_lab_cases(quick)
+    own = gas_lab_wall_limits()
+    for c in cases:
+        c.wall_limit = own.get(c.label)
+    return cases, keys
+
+
+def _gas_lab_cases(quick: bool) -> tuple[list[StudyCase], list[tuple[float, float | None]]]:
+    """Return the gas-lab cases and each one's (grain diameter, air flow; None: open top)."""
     entry = study_table("suite")["gas-lab"]
     preset = entry["preset"]
     base = overrides(pick(entry, "set", quick))
-    cases, keys = [], []
+    cases: list[StudyCase] = []
+    keys: list[tuple[float, float | None]] = []
     for d in pick(entry, "grain_diameters", quick):
         size = f"material.grain_diameter={d!r}"
         cases.append(StudyCase(f"d = {d * 1e6:.0f} um, open top", preset, [*base, size]))
@@ -270,12 +291,13 @@ def gas_lab(
             label = f"d = {d * 1e6:.0f} um, Q_air = {q:g} L/min"
             cases.append(StudyCase(label, preset, [*base, size, *mode]))
             keys.append((d, q))
-    rows = run_rows(cases, work / "gas-lab", jobs, limit, on_row)
-    for r, (d, q) in zip(rows, keys, strict=True):
-        r["grain_diameter"], r["q_air_lpm"] = d, q
-    data = {"rows": rows}
-    derive_gas_lab(data)
-    return data
+    return cases, keys
+
+
+def gas_lab_wall_limits() -> dict[str, float]:
+    """Return the gas-lab rows' own wall-time limits (``suite.toml`` [gas-lab] ``wall_limits``)."""
+    labels = [c.label for c in _gas_lab_cases(quick=False)[0]]
+    return wall_limits(study_table("suite")["gas-lab"], "suite.toml gas-lab", labels)
 
 
 def derive_gas_lab(data: dict[str, Any]) -> None:
@@ -434,10 +456,10 @@ def preset_wall_limits() -> dict[str, float]:
 def longest_wall_limit(limit: float) -> float:
     """Return the longest wall-time limit a case of the suite runs under (s).
 
-    ``limit`` is the suite's per-case limit; a preset's own ``wall_limits``
-    can be longer (a batch job's ``--time`` must cover it).
+    ``limit`` is the suite's per-case limit; a preset's or a gas-lab row's own
+    ``wall_limits`` can be longer (a batch job's ``--time`` must cover it).
     """
-    return max([limit, *preset_wall_limits().values()])
+    return max([limit, *preset_wall_limits().values(), *gas_lab_wall_limits().values()])
 
 
 # --------------------------------------------------------------------- suite
