@@ -59,6 +59,10 @@ _RE_RETAKE = re.compile(
     + r"; taken again with deltaT = "
     + _FLOAT
 )
+#: a step that passed, taken again as a check (``run.retake_check_interval``)
+_RE_RETAKE_CHECK = re.compile(
+    r"^Step retaken for a check: in the step from t = " + _FLOAT + r" with deltaT = " + _FLOAT
+)
 _RE_STEP_DIVERGED = re.compile(r"^Step diverged: (volume fraction|Courant number) (.*)$")
 _RE_STEP_FROM = re.compile(r"in the step from t = " + _FLOAT)
 _RE_ALPHA = re.compile(
@@ -274,15 +278,12 @@ class LogMonitor:
                 }
             )
             self._attempt_alpha_max = -math.inf
-            if self.steps:
-                failed = self.steps.pop()
-                # the retake prints no Courant or step lines of its own
-                self._pending = {
-                    "courant": failed.courant,
-                    "interface_courant": failed.interface_courant,
-                    "granular_courant": failed.granular_courant,
-                    "delta_t": float(m.group(6)),
-                }
+            self._drop_attempt(float(m.group(6)))
+            return
+        m = _RE_RETAKE_CHECK.match(line)
+        if m:
+            # the check's pass prints the step again: one row per step
+            self._drop_attempt(float(m.group(2)))
             return
         m = _RE_CONT.match(line)
         if m:
@@ -293,6 +294,21 @@ class LogMonitor:
         m = _RE_EXEC.match(line)
         if m:
             step.execution_time = float(m.group(1))
+
+    def _drop_attempt(self, delta_t: float) -> None:
+        """Drop the last step's row: the solver takes that step again at ``delta_t``.
+
+        The step taken again prints no Courant or step lines of its own: the
+        dropped attempt's carry over.
+        """
+        if self.steps:
+            dropped = self.steps.pop()
+            self._pending = {
+                "courant": dropped.courant,
+                "interface_courant": dropped.interface_courant,
+                "granular_courant": dropped.granular_courant,
+                "delta_t": delta_t,
+            }
 
     def write_table(self, path: Path) -> None:
         """Write one row per time step (CSV), replaced whole."""

@@ -434,6 +434,15 @@ class Run:
         le=10,
         default=4,
     )
+    retake_check_interval: int = _f(
+        "diagnostic: every this many steps the solver takes a step that passed again from its "
+        "saved start with the same step and stops with an error unless it ends on the same "
+        "fields to the last digit (a check that a retake puts back all a step carries over); "
+        "0: never",
+        ge=0,
+        le=1000000,
+        default=0,
+    )
 
 
 @dataclass(frozen=True)

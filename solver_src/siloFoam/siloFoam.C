@@ -139,6 +139,15 @@ int main(int argc, char *argv[])
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
         const siloTime::stepStart stepStart(runTime.start());
+        // The end of this step's first pass, where it is taken again as a
+        // check (createStepRetake.H)
+        autoPtr<volVectorField> checkU;
+        autoPtr<volScalarField> checkP_rgh;
+        autoPtr<volScalarField> checkAlpha1;
+        autoPtr<surfaceScalarField> checkPhi;
+        const bool checkThisStep =
+            retakeCheckInterval > 0
+         && (runTime.timeIndex() + 1) % retakeCheckInterval == 0;
         for (;;)
         {
             ++runTime;
@@ -216,6 +225,48 @@ int main(int argc, char *argv[])
                         "Courant number " + Foam::name(endCo) + " (limit "
                       + Foam::name(maxCo) + ") at its end";
                 }
+            }
+
+            if (checkThisStep && checkU.valid())
+            {
+                // The second pass of a checked step: it must end where the
+                // first did
+                // (a failed second pass differs by GREAT)
+                const bool passed = stepFailure.empty();
+                const scalar dU = passed ? gMax(mag(U - checkU())()) : GREAT;
+                const scalar dP = passed ? gMax(mag(p_rgh - checkP_rgh())()) : GREAT;
+                const scalar dAlpha =
+                    passed ? gMax(mag(alpha1 - checkAlpha1())()) : GREAT;
+                const scalar dPhi = passed ? gMax(mag(phi - checkPhi())()) : GREAT;
+                Info<< "Retake check in the step from t = " << stepStart.value
+                    << ": largest differences U " << dU << ", p_rgh " << dP
+                    << ", alpha " << dAlpha << ", phi " << dPhi << nl << endl;
+                if (dU != 0 || dP != 0 || dAlpha != 0 || dPhi != 0)
+                {
+                    FatalErrorInFunction
+                        << "Retake check failed: the step from t = "
+                        << stepStart.value << " taken again from its saved"
+                        << " start does not end on the same fields (U by "
+                        << dU << ", p_rgh by " << dP << ", alpha by " << dAlpha
+                        << ", phi by " << dPhi << "): a field the step"
+                        << " carries over is not put back"
+                        << " (createStepRetake.H)" << exit(FatalError);
+                }
+                break;
+            }
+
+            if (stepFailure.empty() && checkThisStep)
+            {
+                checkU.reset(new volVectorField("checkU", U));
+                checkP_rgh.reset(new volScalarField("checkP_rgh", p_rgh));
+                checkAlpha1.reset(new volScalarField("checkAlpha1", alpha1));
+                checkPhi.reset(new surfaceScalarField("checkPhi", phi));
+                restoreStepStart();
+                runTime.rewind(stepStart);
+                Info<< "Step retaken for a check: in the step from t = "
+                    << stepStart.value << " with deltaT = "
+                    << runTime.deltaTValue() << nl << endl;
+                continue;
             }
 
             if (stepFailure.empty())
