@@ -250,6 +250,15 @@ def case_report(summary: RunSummary) -> Path:
                 for r in retakes
             ]
             out.append("")
+        share_retakes = run.get("share_retakes") or []
+        if share_retakes:
+            growth = max(r["growth"] for r in share_retakes)
+            out += [
+                f"The solver took {len(share_retakes)} step(s) again at the same step with half "
+                "the stress's divergence share, their outer iterations growing (by up to "
+                f"{_fmt(growth, '.3g')} times; `numerics.outer_growth_limit`, docs/solver.md).",
+                "",
+            ]
         if run.get("recoveries"):
             out += [
                 "",

@@ -246,6 +246,38 @@ def test_a_step_taken_again_from_its_saved_start_ends_where_it_first_did(
     assert times == sorted(set(times))  # one row per step: the check's pass dropped
 
 
+def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(tmp_path, solver):
+    # the lab wedge with a growth limit just above 1 (numerics.outer_growth_limit;
+    # its outer iterations' velocity change grows from the second to the third
+    # in many steps, docs/solver.md): those steps are taken again from their
+    # start, at the same step, with half the divergence share, once each and
+    # not in the first discharge time; each such step, checked, ends where it
+    # first did (run.retake_check_interval)
+    case = tmp_path / "share"
+    code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
+                  *sets(["mesh.cells_across=36", "run.end_time=0.08", "run.write_interval=0.08",
+                         "numerics.outer_growth_limit=1.02", "run.retake_check_interval=1",
+                         "run.max_recoveries=0"]))  # fmt: skip
+    assert code == 0, s.get("error")
+    share = s["run"]["share_retakes"]
+    log = (case / "log.siloFoam").read_text()
+    assert share and log.count("Step retaken with half the stress share") == len(share)
+    starts = [r["time"] for r in share]
+    assert len(set(starts)) == len(starts)  # once per step
+    discharge_time = (0.01 / 9.81) ** 0.5  # sqrt(D/g), the lab silo's D = 10 mm
+    assert min(starts) >= discharge_time * (1 - 1e-9)
+    assert all(r["growth"] > 1.02 for r in share)
+    with open(case / "steps.csv") as f:
+        rows = list(csv.DictReader(f))
+    times = [float(r["time"]) for r in rows]
+    assert times == sorted(set(times))
+    # the step kept after a share retake is the same step, not a halved one
+    # (the time is logged to 8 digits, the step to 10)
+    kept = [(float(r["time"]), float(r["delta_t"])) for r in rows]
+    for t0 in starts:
+        assert any(abs(t - dt - t0) < 1e-7 * t for t, dt in kept), t0
+
+
 def test_retakes_are_bounded_per_discharge_time_then_the_runner_caps_the_step(tmp_path, solver):
     # the same unstable scene with one retake allowed per discharge time: the
     # first blow-up (t = 0.0044 s) is retaken, the next one within the same

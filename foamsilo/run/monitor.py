@@ -59,6 +59,18 @@ _RE_RETAKE = re.compile(
     + r"; taken again with deltaT = "
     + _FLOAT
 )
+#: a step whose outer iterations grew, taken again with half the stress's
+#: divergence share (``numerics.outer_growth_limit``)
+_RE_SHARE_RETAKE = re.compile(
+    r"^Step retaken with half the stress share: outer iterations growing by "
+    + _FLOAT
+    + r" \(limit "
+    + _FLOAT
+    + r"\), in the step from t = "
+    + _FLOAT
+    + r" with deltaT = "
+    + _FLOAT
+)
 #: a step that passed, taken again as a check (``run.retake_check_interval``)
 _RE_RETAKE_CHECK = re.compile(
     r"^Step retaken for a check: in the step from t = " + _FLOAT + r" with deltaT = " + _FLOAT
@@ -155,6 +167,10 @@ class LogMonitor:
         #: the steps the solver took again, each with why (``detail``), its
         #: start ``time``, the step that failed and the one it was taken with
         self.retakes: list[dict[str, float | str]] = []
+        #: steps taken again with half the stress's divergence share, their
+        #: outer iterations growing (``numerics.outer_growth_limit``): start
+        #: ``time`` and ``growth``
+        self.share_retakes: list[dict[str, float]] = []
         #: start of the step that ended the solver's retakes (``Step diverged``):
         #: its retake window ends there
         self.diverged_step_start: float | None = None
@@ -279,6 +295,12 @@ class LogMonitor:
             )
             self._attempt_alpha_max = -math.inf
             self._drop_attempt(float(m.group(6)))
+            return
+        m = _RE_SHARE_RETAKE.match(line)
+        if m:
+            self.share_retakes.append({"time": float(m.group(3)), "growth": float(m.group(1))})
+            self._attempt_alpha_max = -math.inf
+            self._drop_attempt(float(m.group(4)))
             return
         m = _RE_RETAKE_CHECK.match(line)
         if m:

@@ -130,6 +130,10 @@ class RunResult:
         The steps the solver took again with half the step because their outer
         iterations diverged (``run.max_step_retakes``): each one's start
         ``time``, ``detail``, failed ``delta_t`` and ``retake_delta_t``.
+    share_retakes
+        The steps the solver took again at the same step with half the
+        stress's divergence share because their outer iterations grew
+        (``numerics.outer_growth_limit``): each one's start ``time`` and ``growth``.
     """
 
     case: Path
@@ -143,6 +147,7 @@ class RunResult:
     n_procs: int = 1
     emptied_at: float | None = None
     step_retakes: list[dict[str, Any]] = field(default_factory=list)
+    share_retakes: list[dict[str, float]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form (the ``run`` section of the summary)."""
@@ -451,4 +456,5 @@ def run_solver(
         n_procs=n_procs,
         emptied_at=monitor.emptied_at,
         step_retakes=list(monitor.retakes),
+        share_retakes=list(monitor.share_retakes),
     )

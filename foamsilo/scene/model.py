@@ -551,6 +551,17 @@ class Numerics:
         le=1,
         default=1.0,
     )
+    outer_growth_limit: float = _f(
+        "with the implicit stress-pressure coupling: a step whose last outer iteration "
+        "changes the grains' velocity (rms) more than this many times the iteration before "
+        "(the Picard iteration diverging) is taken again from its start at the same step with "
+        "half the divergence share (numerics.stress_pressure_divergence); not in the first "
+        "discharge time; 0: never (what it does: docs/solver.md)",
+        "",
+        ge=0,
+        le=100,
+        default=0.0,
+    )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
         "latest pressure and strain rate; default: 1 planar, 3 axisymmetric and 3D (why: "

@@ -138,6 +138,7 @@ int main(int argc, char *argv[])
         // The step, taken again from its start with half the step while
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
+        stressPressureDivergenceStep = stressPressureDivergence;
         const siloTime::stepStart stepStart(runTime.start());
         // The end of this step's first pass, where it is taken again as a
         // check (createStepRetake.H)
@@ -156,6 +157,8 @@ int main(int argc, char *argv[])
 
             // Why the step failed (empty: it did not)
             string stepFailure;
+            // The grains' velocity change of each outer iteration (rms)
+            DynamicList<scalar> outerChange;
 
             // --- Pressure-velocity PIMPLE corrector loop
             while (pimple.loop())
@@ -163,6 +166,12 @@ int main(int argc, char *argv[])
                 if (!stepFailure.empty())
                 {
                     continue;
+                }
+
+                autoPtr<volVectorField> UOuterStart;
+                if (outerGrowthLimit > 0)
+                {
+                    UOuterStart.reset(new volVectorField("UOuterStart", U));
                 }
 
                 #include "alphaControls.H"
@@ -206,6 +215,50 @@ int main(int argc, char *argv[])
                 if (pimple.turbCorr())
                 {
                     turbulence->correct();
+                }
+
+                if (UOuterStart.valid())
+                {
+                    const scalarField grains(pos(alpha1.primitiveField() - 0.5));
+                    outerChange.append
+                    (
+                        Foam::sqrt
+                        (
+                            gSum
+                            (
+                                grains*mesh.V().field()
+                               *magSqr(U.primitiveField() - UOuterStart().primitiveField())
+                            )
+                           /max(gSum(grains*mesh.V().field()), VSMALL)
+                        )
+                    );
+                }
+            }
+
+            // The outer iterations diverging at the whole share: the step
+            // again, at the same step, with half of it (createFields.H)
+            if
+            (
+                stepFailure.empty() && implicitStressPressure
+             && outerChange.size() >= 2
+             && stressPressureDivergenceStep == stressPressureDivergence
+             && stepStart.value >= retakeFrom
+            )
+            {
+                const label n = outerChange.size();
+                const scalar growth =
+                    outerChange[n - 1]/max(outerChange[n - 2], VSMALL);
+                if (growth > outerGrowthLimit)
+                {
+                    restoreStepStart();
+                    runTime.rewind(stepStart);
+                    stressPressureDivergenceStep = 0.5*stressPressureDivergence;
+                    Info<< "Step retaken with half the stress share: outer"
+                        << " iterations growing by " << growth << " (limit "
+                        << outerGrowthLimit << "), in the step from t = "
+                        << stepStart.value << " with deltaT = "
+                        << runTime.deltaTValue() << nl << endl;
+                    continue;
                 }
             }
 
