@@ -99,6 +99,9 @@ def test_pressure_floor_default_and_explicit():
             "numerics.viscosity_interpolation",
             "'harmonic'",
         ),
+        ("numerics.outer_growth_limit=0.5", "numerics.outer_growth_limit", "> 1"),
+        # the planar silo's stress is lagged: no share to halve
+        ("numerics.outer_growth_limit=2", "numerics.outer_growth_limit", "'implicit'"),
     ],
 )
 def test_bad_values_name_the_field_and_the_allowed_range(override, field, allowed):

@@ -555,8 +555,9 @@ class Numerics:
         "with the implicit stress-pressure coupling: a step whose last outer iteration "
         "changes the grains' velocity (rms) more than this many times the iteration before "
         "(the Picard iteration diverging) is taken again from its start at the same step with "
-        "half the divergence share (numerics.stress_pressure_divergence); not in the first "
-        "discharge time; 0: never (what it does: docs/solver.md)",
+        "half the divergence share (numerics.stress_pressure_divergence) and four times the "
+        "outer iterations; not in the first discharge time; 0: never, else above 1 (what it "
+        "does: docs/solver.md)",
         "",
         ge=0,
         le=100,

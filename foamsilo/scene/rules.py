@@ -32,6 +32,14 @@ def validate(scene: Scene) -> None:
             "material.viscosity_cap_scaled [x rho_p sqrt(g L^3)]",
         )
     _validate_rheology(scene)
+    growth = scene.numerics.outer_growth_limit
+    if growth and (growth <= 1 or scene.stress_pressure_coupling != "implicit"):
+        raise SceneError(
+            "numerics.outer_growth_limit",
+            f"got {growth:g}: allowed: 0 (never) or > 1 and <= 100, with "
+            "numerics.stress_pressure_coupling = 'implicit' (the share it halves); this scene's "
+            f"coupling: {scene.stress_pressure_coupling}",
+        )
     if m.grain_diameter >= s.orifice_width:
         raise SceneError(
             "material.grain_diameter",

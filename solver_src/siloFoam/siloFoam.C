@@ -107,6 +107,13 @@ int main(int argc, char *argv[])
      && gSum(alpha1.primitiveField()*mesh.V().field()) > stopGranularVolume
     );
 
+    // The scene's outer iterations; a step taken again with half the
+    // stress share runs more (below). pimpleControl reads the count from
+    // the solution dictionary at each loop
+    dictionary& pimpleDict =
+        static_cast<fvSolution&>(mesh).subDict("PIMPLE");
+    const label nOuterCorrectors(pimpleDict.get<label>("nOuterCorrectors"));
+
     Info<< "\nStarting time loop\n" << endl;
 
     while (runTime.run())
@@ -139,6 +146,7 @@ int main(int argc, char *argv[])
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
         stressPressureDivergenceStep = stressPressureDivergence;
+        pimpleDict.set("nOuterCorrectors", nOuterCorrectors);
         const siloTime::stepStart stepStart(runTime.start());
         // The end of this step's first pass, where it is taken again as a
         // check (createStepRetake.H)
@@ -253,6 +261,11 @@ int main(int argc, char *argv[])
                     restoreStepStart();
                     runTime.rewind(stepStart);
                     stressPressureDivergenceStep = 0.5*stressPressureDivergence;
+                    // ... and with four times the outer iterations: three
+                    // end a half-share step elsewhere than the whole share's
+                    // steps around it, which can start a burst of its own
+                    // (docs/solver.md)
+                    pimpleDict.set("nOuterCorrectors", 4*nOuterCorrectors);
                     Info<< "Step retaken with half the stress share: outer"
                         << " iterations growing by " << growth << " (limit "
                         << outerGrowthLimit << "), in the step from t = "
