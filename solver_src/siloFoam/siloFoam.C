@@ -107,12 +107,17 @@ int main(int argc, char *argv[])
      && gSum(alpha1.primitiveField()*mesh.V().field()) > stopGranularVolume
     );
 
-    // The scene's outer iterations; a step taken again with half the
-    // stress share runs more (below). pimpleControl reads the count from
-    // the solution dictionary at each loop
-    dictionary& pimpleDict =
-        static_cast<fvSolution&>(mesh).subDict("PIMPLE");
-    const label nOuterCorrectors(pimpleDict.get<label>("nOuterCorrectors"));
+    // A step taken again with half the stress share runs more outer
+    // iterations (below): pimpleControl reads their count from the solution
+    // dictionary at each loop. Looked up at each use, never kept: the runner
+    // rewrites fvSolution during a run (a recovery's iterations put back) and
+    // the dictionary is then read again. The count to put back at the next
+    // step, -1: none
+    auto pimpleDict = [&]() -> dictionary&
+    {
+        return static_cast<fvSolution&>(mesh).subDict("PIMPLE");
+    };
+    label outerCorrectorsToRestore = -1;
 
     Info<< "\nStarting time loop\n" << endl;
 
@@ -146,7 +151,19 @@ int main(int argc, char *argv[])
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
         stressPressureDivergenceStep = stressPressureDivergence;
-        pimpleDict.set("nOuterCorrectors", nOuterCorrectors);
+        if (outerCorrectorsToRestore > 0)
+        {
+            // unless the dictionary was read again since (the runner's own count)
+            if
+            (
+                pimpleDict().get<label>("nOuterCorrectors")
+             == 4*outerCorrectorsToRestore
+            )
+            {
+                pimpleDict().set("nOuterCorrectors", outerCorrectorsToRestore);
+            }
+            outerCorrectorsToRestore = -1;
+        }
         const siloTime::stepStart stepStart(runTime.start());
         // The end of this step's first pass, where it is taken again as a
         // check (createStepRetake.H)
@@ -265,7 +282,12 @@ int main(int argc, char *argv[])
                     // end a half-share step elsewhere than the whole share's
                     // steps around it, which can start a burst of its own
                     // (docs/solver.md)
-                    pimpleDict.set("nOuterCorrectors", 4*nOuterCorrectors);
+                    outerCorrectorsToRestore =
+                        pimpleDict().get<label>("nOuterCorrectors");
+                    pimpleDict().set
+                    (
+                        "nOuterCorrectors", 4*outerCorrectorsToRestore
+                    );
                     Info<< "Step retaken with half the stress share: outer"
                         << " iterations growing by " << growth << " (limit "
                         << outerGrowthLimit << "), in the step from t = "
