@@ -11,6 +11,7 @@ from foamsilo.case.times import (
     RESTART_FIELDS,
     prune_incomplete_times,
     prune_times_past_step_rows,
+    resumable_times,
     time_directories,
 )
 from foamsilo.errors import SceneError
@@ -83,6 +84,10 @@ def test_a_time_written_before_its_step_s_rows_is_not_a_restart_point(tmp_path):
         write_time(case, t)
     write_rows(case, "orificeFlow", "0", [0.05, 0.1, 0.15, 0.1975])
     write_rows(case, "granularVolume", "0", [0.05, 0.1, 0.15, 0.1975])
+    # what an interrupted run reports as the time to resume from is the one
+    # the resume takes (a run stopped by Ctrl-C right after writing 0.2 said
+    # 0.2 and resumed from 0.1)
+    assert resumable_times(case) == ["0", "0.1"]
     assert prune_times_past_step_rows(case) == ["0.2"]
     assert time_directories(case) == ["0", "0.1"]
     # rows up to the written time (or past it): nothing removed; the
@@ -91,7 +96,7 @@ def test_a_time_written_before_its_step_s_rows_is_not_a_restart_point(tmp_path):
     write_rows(case, "orificeFlow", "0.1", [0.1, 0.15, 0.2])
     write_rows(case, "granularVolume", "0.1", [0.1, 0.15, 0.2, 0.205])
     assert prune_times_past_step_rows(case) == []
-    assert time_directories(case) == ["0", "0.1", "0.2"]
+    assert time_directories(case) == resumable_times(case) == ["0", "0.1", "0.2"]
 
 
 def test_hostfiles_naming_only_this_machine_are_local(tmp_path):

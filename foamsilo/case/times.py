@@ -136,23 +136,34 @@ def last_step_row(case: Path, name: str) -> float | None:
     return None
 
 
+def resumable_times(case: Path) -> list[str]:
+    """Complete times a restart can go on from, oldest first.
+
+    The complete times without the latest ones whose step the function objects
+    have no row for: a restart from such a time would leave a gap in the
+    per-step tables (the mass balance and Q read them).
+    """
+    times = time_directories(case)
+    rows = [last_step_row(case, n) for n in STEP_ROW_TABLES]
+    while times and float(times[-1]) > 0:
+        latest = float(times[-1])
+        if all(t is None or t >= latest * (1 - 1e-6) for t in rows):
+            break
+        times.pop()
+    return times
+
+
 def prune_times_past_step_rows(case: Path) -> list[str]:
     """Remove the latest times whose step the function objects have no row for.
 
-    A restart from such a time would leave a gap in the per-step tables (the
-    mass balance and Q read them), so the time before is restarted from
-    instead. Returns the names removed.
+    The time before is restarted from instead (:func:`resumable_times`).
+    Returns the names removed.
     """
-    removed: list[str] = []
-    while True:
-        times = [float(t) for t in time_directories(case)]
-        latest = max(times, default=0.0)
-        if latest <= 0:
-            return removed
-        rows = [last_step_row(case, n) for n in STEP_ROW_TABLES]
-        if all(t is None or t >= latest * (1 - 1e-6) for t in rows):
-            return removed
-        removed += remove_times_from(case, latest)
+    complete = time_directories(case)
+    keep = resumable_times(case)
+    if len(keep) == len(complete):
+        return []
+    return remove_times_from(case, float(complete[len(keep)]))
 
 
 #: Fields whose values a restart takes over; a NaN or Inf in one poisons the run

@@ -39,6 +39,7 @@ from foamsilo.case import (
 from foamsilo.case.times import (
     latest_processor_time,
     latest_root_time,
+    resumable_times,
     set_aside_nonfinite_times,
     time_directories,
 )
@@ -411,7 +412,9 @@ def run_solver(
 
     interrupted_run = interrupted or data.get("keyboardInterrupt")
     if interrupted_run and monitor.divergence is None and not timed_out:
-        good = time_directories(case)
+        # the time --resume will go on from (a time written just before the
+        # signal may have no row of its step yet)
+        good = resumable_times(case)
         raise RunInterruptedError(monitor.current_time, good[-1] if good else None, case)
     if timed_out and monitor.divergence is None:
         raise RunTimeLimitError(float(max_wall_seconds or 0), timed_out[0], end_time, case)
