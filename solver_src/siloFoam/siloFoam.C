@@ -165,6 +165,12 @@ int main(int argc, char *argv[])
             outerCorrectorsToRestore = -1;
         }
         const siloTime::stepStart stepStart(runTime.start());
+        // Back to the step's start: the fields, then the time
+        auto backToStepStart = [&]()
+        {
+            restoreStepStart();
+            runTime.rewind(stepStart);
+        };
         // The end of this step's first pass, where it is taken again as a
         // check (createStepRetake.H)
         autoPtr<volVectorField> checkU;
@@ -275,8 +281,7 @@ int main(int argc, char *argv[])
                     outerChange[n - 1]/max(outerChange[n - 2], VSMALL);
                 if (growth > outerGrowthLimit)
                 {
-                    restoreStepStart();
-                    runTime.rewind(stepStart);
+                    backToStepStart();
                     stressPressureDivergenceStep = 0.5*stressPressureDivergence;
                     // ... and with four times the outer iterations: three
                     // end a half-share step elsewhere than the whole share's
@@ -349,8 +354,7 @@ int main(int argc, char *argv[])
                 checkP_rgh.reset(new volScalarField("checkP_rgh", p_rgh));
                 checkAlpha1.reset(new volScalarField("checkAlpha1", alpha1));
                 checkPhi.reset(new surfaceScalarField("checkPhi", phi));
-                restoreStepStart();
-                runTime.rewind(stepStart);
+                backToStepStart();
                 Info<< "Step retaken for a check: in the step from t = "
                     << stepStart.value << " with deltaT = "
                     << runTime.deltaTValue() << nl << endl;
@@ -398,8 +402,7 @@ int main(int argc, char *argv[])
             }
             retakeTimes.append(stepStart.value);
 
-            restoreStepStart();
-            runTime.rewind(stepStart);
+            backToStepStart();
             runTime.setDeltaT(0.5*failedDeltaT);
             if (!faceSmoothingByCourant)
             {
