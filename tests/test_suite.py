@@ -359,3 +359,19 @@ def test_3d_and_axisymmetric_are_compared_at_their_finest_common_steady_grid():
     result["work-precision"]["venier-test1-3d"]["rows"][1]["Q"] = 4.88
     (c,) = [c for c in checks(result) if "venier-test1-3d" in c.name]
     assert c.passed
+
+
+def test_a_row_counts_the_runner_s_recoveries_and_the_solver_s_retakes(tmp_path):
+    # what run.json lists (pipeline._record): each kind counted, so a change to the
+    # retakes shows which rows it touched; a case with no record gives nothing
+    from foamsilo.case.lifecycle import RUN_RECORD
+    from foamsilo.studies.cases import record_fields
+
+    assert record_fields(tmp_path) == {}
+    (tmp_path / RUN_RECORD).write_text(
+        '{"status": "finished", "recoveries": [{"time": 0.1}],'
+        ' "step_retakes": [{"time": 0.2}, {"time": 0.3}],'
+        ' "share_retakes": [{"time": 0.2, "growth": 3.0}, {"time": 0.25, "growth": 2.5},'
+        ' {"time": 0.4, "growth": 9.0}]}'
+    )
+    assert record_fields(tmp_path) == {"recoveries": 1, "step_retakes": 2, "share_retakes": 3}

@@ -195,11 +195,19 @@ def summary_fields(s: dict[str, Any]) -> dict[str, Any]:
 
 
 def record_fields(case_dir: Path) -> dict[str, Any]:
-    """Return what a row takes from ``run.json`` (also a stopped run's): its recoveries."""
+    """Return what a row takes from ``run.json`` (also a stopped run's).
+
+    The runner's recoveries and the solver's steps taken again (at half the step,
+    ``run.max_step_retakes``, or at half the divergence share,
+    ``numerics.outer_growth_limit``), each as a count.
+    """
     from foamsilo.case import read_run_record
 
     record = read_run_record(Path(case_dir))
-    return {"recoveries": len(record.get("recoveries") or [])} if record else {}
+    if not record:
+        return {}
+    keys = ("recoveries", "step_retakes", "share_retakes")
+    return {k: len(record.get(k) or []) for k in keys}
 
 
 def run_rows(
