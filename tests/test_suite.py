@@ -250,6 +250,14 @@ def test_one_preset_rerun_replaces_its_row_only(tmp_path, monkeypatch):
     assert result["jobs_by_entry"] == {"presets": "2 cases at a time",
                                        "presets/zhou-planar": "1 cases at a time"}  # fmt: skip
     assert result["cpu_by_entry"] == {"presets": "Elsewhere CPU", "presets/zhou-planar": here}
+    # the whole entry rerun: the part's rerun is in it, and its own timing,
+    # commit, jobs and machine go
+    monkeypatch.setitem(suite.ENTRIES, "presets", lambda quick, work, jobs, limit, on_row=None: {
+        "rows": [row("zhou-planar", 4.0), row("venier-test1", 5.0)]})  # fmt: skip
+    result = suite.run_suite(False, tmp_path, tmp_path / "work", only=["presets"], jobs=1)
+    for book in ("wall_s", "commits", "jobs_by_entry", "cpu_by_entry"):
+        assert list(result[book]) == ["presets"], (book, result[book])
+    assert "presets/zhou-planar" not in (tmp_path / "suite.md").read_text()
 
 
 def test_every_stiff_case_is_a_valid_scene():
