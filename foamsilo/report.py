@@ -259,6 +259,14 @@ def case_report(summary: RunSummary) -> Path:
                 f"{_fmt(growth, '.3g')} times; `numerics.outer_growth_limit`, docs/solver.md).",
                 "",
             ]
+            failed = [r for r in share_retakes if r.get("failed")]
+            if failed:
+                out += [
+                    f"{len(failed)} of them failed at half the share and were taken as the whole "
+                    f"share first took them (first at t = {_fmt(failed[0]['time'], '.6g')} s: "
+                    f"{failed[0]['failed']}).",
+                    "",
+                ]
         if run.get("recoveries"):
             out += [
                 "",

@@ -137,3 +137,26 @@ def test_the_face_viscosity_reaches_the_solver(tmp_path):
         render_templates(scene, tmp_path / mean)
         pimple = read_dict(tmp_path / mean / "system/fvSolution")["PIMPLE"]
         assert pimple["viscosityInterpolation"] == mean
+
+
+def test_the_outer_growth_limit_follows_the_coupling(tmp_path):
+    """By default a step is taken again at half the share only where there is one.
+
+    With the implicit stress-pressure coupling (the wedges, wall friction, tall
+    columns) siloFoam gets ``outerGrowthLimit`` 2; with the lagged one (the
+    planar silo) 0, never; a scene's own value is written as given.
+    """
+    from foamsilo.foam.dictionary import read_dict
+
+    cases = [
+        ("zhou-cyl-bottom", [], 2.0),
+        ("zhou-rect-bottom", [], 2.0),
+        ("zhou-planar", [], 0.0),
+        ("zhou-planar", ["numerics.stress_pressure_coupling=implicit"], 2.0),
+        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=0"], 0.0),
+        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=5"], 5.0),
+    ]
+    for k, (preset, sets, limit) in enumerate(cases):
+        render_templates(load_preset(preset, sets), tmp_path / str(k))
+        pimple = read_dict(tmp_path / str(k) / "system/fvSolution")["PIMPLE"]
+        assert float(pimple["outerGrowthLimit"]) == limit, (preset, sets)

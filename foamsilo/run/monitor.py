@@ -71,6 +71,12 @@ _RE_SHARE_RETAKE = re.compile(
     + r" with deltaT = "
     + _FLOAT
 )
+#: a step taken again with half the share that failed, taken as the whole
+#: share first took it
+_RE_SHARE_FALLBACK = re.compile(
+    r"^Step retaken at the whole stress share: the step taken again with half of it "
+    r"failed \((.*)\), in the step from t = " + _FLOAT + r" with deltaT = " + _FLOAT
+)
 #: a step that passed, taken again as a check (``run.retake_check_interval``)
 _RE_RETAKE_CHECK = re.compile(
     r"^Step retaken for a check: in the step from t = " + _FLOAT + r" with deltaT = " + _FLOAT
@@ -169,8 +175,9 @@ class LogMonitor:
         self.retakes: list[dict[str, float | str]] = []
         #: steps taken again with half the stress's divergence share, their
         #: outer iterations growing (``numerics.outer_growth_limit``): start
-        #: ``time`` and ``growth``
-        self.share_retakes: list[dict[str, float]] = []
+        #: ``time`` and ``growth``, and ``failed`` (why) where the step at half
+        #: the share failed and was taken as the whole share first took it
+        self.share_retakes: list[dict[str, float | str]] = []
         #: start of the step that ended the solver's retakes (``Step diverged``):
         #: its retake window ends there
         self.diverged_step_start: float | None = None
@@ -301,6 +308,13 @@ class LogMonitor:
             self.share_retakes.append({"time": float(m.group(3)), "growth": float(m.group(1))})
             self._attempt_alpha_max = -math.inf
             self._drop_attempt(float(m.group(4)))
+            return
+        m = _RE_SHARE_FALLBACK.match(line)
+        if m:
+            if self.share_retakes:
+                self.share_retakes[-1]["failed"] = m.group(1)
+            self._attempt_alpha_max = -math.inf
+            self._drop_attempt(float(m.group(3)))
             return
         m = _RE_RETAKE_CHECK.match(line)
         if m:

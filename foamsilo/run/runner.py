@@ -134,7 +134,9 @@ class RunResult:
     share_retakes
         The steps the solver took again at the same step with half the
         stress's divergence share because their outer iterations grew
-        (``numerics.outer_growth_limit``): each one's start ``time`` and ``growth``.
+        (``numerics.outer_growth_limit``): each one's start ``time`` and
+        ``growth``, and ``failed`` (why) where that step failed and was taken as
+        the whole share first took it.
     """
 
     case: Path
@@ -148,7 +150,7 @@ class RunResult:
     n_procs: int = 1
     emptied_at: float | None = None
     step_retakes: list[dict[str, Any]] = field(default_factory=list)
-    share_retakes: list[dict[str, float]] = field(default_factory=list)
+    share_retakes: list[dict[str, float | str]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form (the ``run`` section of the summary)."""

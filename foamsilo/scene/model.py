@@ -27,6 +27,12 @@ TALL_COLUMN = 10.0
 #: Equivalent fill height, in silo widths, below which the discharge is over
 #: (Scene.emptied_height)
 EMPTIED_FILL = 0.5
+#: With the implicit stress-pressure coupling, a step whose last outer
+#: iteration changes the grains' velocity more than this many times the one
+#: before is taken again with half the divergence share by default
+#: (Scene.outer_growth_limit; the choice and its effect on the suite's rows:
+#: docs/solver.md, "Half the share for a step whose outer iterations grow")
+OUTER_GROWTH_LIMIT = 2.0
 
 Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 
@@ -551,17 +557,17 @@ class Numerics:
         le=1,
         default=1.0,
     )
-    outer_growth_limit: float = _f(
+    outer_growth_limit: float | None = _f(
         "with the implicit stress-pressure coupling: a step whose last outer iteration "
         "changes the grains' velocity (rms) more than this many times the iteration before "
         "(the Picard iteration diverging) is taken again from its start at the same step with "
         "half the divergence share (numerics.stress_pressure_divergence) and four times the "
         "outer iterations; not in the first discharge time; 0: never, else above 1 (what it "
-        "does: docs/solver.md)",
+        "does: docs/solver.md); default: 2 with the implicit coupling, else 0",
         "",
         ge=0,
         le=100,
-        default=0.0,
+        default=None,
     )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
@@ -676,6 +682,13 @@ class Scene:
         tall = self.silo.fill_height > TALL_COLUMN * self.silo.width
         implicit = self.representation == "axisymmetric" or self.wall_friction or tall
         return "implicit" if implicit else "lagged"
+
+    @property
+    def outer_growth_limit(self) -> float:
+        """``numerics.outer_growth_limit`` resolved: 0 (never) without the implicit coupling."""
+        if self.numerics.outer_growth_limit is not None:
+            return self.numerics.outer_growth_limit
+        return OUTER_GROWTH_LIMIT if self.stress_pressure_coupling == "implicit" else 0.0
 
     @property
     def outer_correctors(self) -> int:

@@ -32,7 +32,7 @@ def validate(scene: Scene) -> None:
             "material.viscosity_cap_scaled [x rho_p sqrt(g L^3)]",
         )
     _validate_rheology(scene)
-    growth = scene.numerics.outer_growth_limit
+    growth = scene.outer_growth_limit
     if growth and (growth <= 1 or scene.stress_pressure_coupling != "implicit"):
         raise SceneError(
             "numerics.outer_growth_limit",

@@ -151,19 +151,25 @@ int main(int argc, char *argv[])
         // its outer iterations diverge (createStepRetake.H)
         saveStepStart();
         stressPressureDivergenceStep = stressPressureDivergence;
-        if (outerCorrectorsToRestore > 0)
+        // The scene's outer iterations back after a step taken again with
+        // half the share, unless the dictionary was read again since (the
+        // runner's own count)
+        auto restoreOuterCorrectors = [&]()
         {
-            // unless the dictionary was read again since (the runner's own count)
             if
             (
-                pimpleDict().get<label>("nOuterCorrectors")
+                outerCorrectorsToRestore > 0
+             && pimpleDict().get<label>("nOuterCorrectors")
              == 4*outerCorrectorsToRestore
             )
             {
                 pimpleDict().set("nOuterCorrectors", outerCorrectorsToRestore);
             }
             outerCorrectorsToRestore = -1;
-        }
+        };
+        restoreOuterCorrectors();
+        // Whether this step was taken again with half the share: once a step
+        bool shareRetaken = false;
         const siloTime::stepStart stepStart(runTime.start());
         // Back to the step's start: the fields, then the time
         auto backToStepStart = [&]()
@@ -272,7 +278,7 @@ int main(int argc, char *argv[])
             (
                 stepFailure.empty() && implicitStressPressure
              && outerChange.size() >= 2
-             && stressPressureDivergenceStep == stressPressureDivergence
+             && !shareRetaken
              && stepStart.value >= retakeFrom
             )
             {
@@ -282,6 +288,7 @@ int main(int argc, char *argv[])
                 if (growth > outerGrowthLimit)
                 {
                     backToStepStart();
+                    shareRetaken = true;
                     stressPressureDivergenceStep = 0.5*stressPressureDivergence;
                     // ... and with four times the outer iterations: three
                     // end a half-share step elsewhere than the whole share's
@@ -367,6 +374,22 @@ int main(int argc, char *argv[])
             }
 
             const scalar failedDeltaT = runTime.deltaTValue();
+            // A step taken again with half the share that fails is taken as
+            // the whole share first took it (that pass passed, and a retake
+            // starts from the same state): at half the share the longer
+            // iteration can diverge where three passes at the whole share
+            // do not (docs/solver.md)
+            if (stressPressureDivergenceStep != stressPressureDivergence)
+            {
+                backToStepStart();
+                stressPressureDivergenceStep = stressPressureDivergence;
+                restoreOuterCorrectors();
+                Info<< "Step retaken at the whole stress share: the step taken"
+                    << " again with half of it failed (" << stepFailure.c_str()
+                    << "), in the step from t = " << stepStart.value
+                    << " with deltaT = " << failedDeltaT << nl << endl;
+                continue;
+            }
             if (stepStart.value < retakeFrom)
             {
                 FatalErrorInFunction
