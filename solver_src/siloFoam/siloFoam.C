@@ -168,7 +168,7 @@ int main(int argc, char *argv[])
             outerCorrectorsToRestore = -1;
         };
         restoreOuterCorrectors();
-        // Whether this step was taken again with half the share: once a step
+        // Whether this step has been taken again with half the share (once a step)
         bool shareRetaken = false;
         const siloTime::stepStart stepStart(runTime.start());
         // Back to the step's start: the fields, then the time
