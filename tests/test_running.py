@@ -288,7 +288,9 @@ def test_a_step_that_fails_at_half_the_share_is_taken_as_the_whole_share_took_it
     # run steps elsewhere and meets none), and the same steps at half the share with four times the iterations blow up
     # (docs/solver.md). Each such step is taken again at the whole share with
     # the scene's iterations, from its restored start: the run is then the one
-    # without the rule, to the last digit, with no step halved and no recovery
+    # without the rule, to the last digit, with no step halved and no recovery.
+    # After such a failure no step is taken again at half the share for one
+    # retake window (such failures come in runs of steps)
     runs = {}
     for limit in ("2", "0"):
         case = tmp_path / f"limit{limit}"
@@ -302,6 +304,11 @@ def test_a_step_that_fails_at_half_the_share_is_taken_as_the_whole_share_took_it
     assert failed and "between" in failed[0]["failed"], share
     log = (case / "log.siloFoam").read_text()
     assert log.count("Step retaken at the whole stress share") == len(failed)
+    window = dict_value(case / "system/controlDict", "retakeWindow")
+    for f in failed:
+        paused = [r for r in share if f["time"] < r["time"] < f["time"] + window]
+        assert paused == [], (f, paused)
+    assert log.count("No step taken again at half the stress share before") == len(failed)
     assert s["run"]["step_retakes"] == [] and s["run"]["recoveries"] == []
     assert runs["0"][1]["run"]["share_retakes"] == []
     flux = [(c / "postProcessing/orificeFlow/0/surfaceFieldValue.dat").read_text()

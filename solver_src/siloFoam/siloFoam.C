@@ -280,6 +280,7 @@ int main(int argc, char *argv[])
              && outerChange.size() >= 2
              && !shareRetaken
              && stepStart.value >= retakeFrom
+             && stepStart.value >= shareRetakesFrom
             )
             {
                 const label n = outerChange.size();
@@ -388,6 +389,10 @@ int main(int argc, char *argv[])
                     << " again with half of it failed (" << stepFailure.c_str()
                     << "), in the step from t = " << stepStart.value
                     << " with deltaT = " << failedDeltaT << nl << endl;
+                shareRetakesFrom = stepStart.value + retakeWindow;
+                Info<< "No step taken again at half the stress share before"
+                    << " t = " << shareRetakesFrom << " (one retakeWindow"
+                    << " after the step that failed at it)" << nl << endl;
                 continue;
             }
             if (stepStart.value < retakeFrom)
