@@ -562,8 +562,10 @@ class Numerics:
         "changes the grains' velocity (rms) more than this many times the iteration before "
         "(the Picard iteration diverging) is taken again from its start at the same step with "
         "half the divergence share (numerics.stress_pressure_divergence) and four times the "
-        "outer iterations; not in the first discharge time; 0: never, else above 1 (what it "
-        "does: docs/solver.md); default: 2 with the implicit coupling, else 0",
+        "outer iterations; not in the first discharge time; a step that then fails is taken "
+        "as the whole share took it, and no step is taken again so for one discharge time "
+        "after it; 0: never, else above 1 (what it does: docs/solver.md); default: 2 with "
+        "the implicit coupling, else 0",
         "",
         ge=0,
         le=100,
