@@ -700,8 +700,8 @@ class Scene:
             return self.numerics.outer_correctors
         # one pass in a dry 3D silo emptied through its floor with the
         # stress's share of a pressure change lagged: the same rate as three at
-        # a third of the cost; a lateral orifice's air needs the three
-        # (docs/geometry.md)
+        # a third of the cost; the one lateral 3D silo measured at one pass
+        # had its step, set by the air, collapse (docs/geometry.md)
         one_pass_3d = (
             self.representation == "3d"
             and self.stress_pressure_coupling == "lagged"
