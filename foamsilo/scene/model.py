@@ -473,7 +473,8 @@ class Numerics:
     )
     cache_gradients: bool | None = _f(
         "compute grad(U) once per step for the rheology and the stress; default: on in "
-        "planar and axisymmetric scenes, off in 3D (why: docs/geometry.md)",
+        "planar and axisymmetric scenes and in 3D ones iterated once a step, off in other 3D "
+        "ones (why: docs/geometry.md, docs/benchmarks/solver.md)",
         default=None,
     )
     friction_relaxation: float = _f(
@@ -674,7 +675,9 @@ class Scene:
         """Whether grad(U) is cached (``numerics.cache_gradients`` resolved)."""
         if self.numerics.cache_gradients is not None:
             return self.numerics.cache_gradients
-        return self.representation != "3d"
+        # in 3D only at one pass a step, where the runs with and without it
+        # are the same to the last digit (docs/benchmarks/solver.md)
+        return self.representation != "3d" or self.outer_correctors == 1
 
     @property
     def stress_pressure_coupling(self) -> str:
