@@ -365,6 +365,18 @@ DRY_PAIR = [
 def test_axisymmetric_and_3d_dry_runs_give_the_same_rate(tmp_path, capsys, openfoam, solver):
     from foamsilo.cli import main
     from foamsilo.pipeline import CaseSpec, run_case
+    from foamsilo.scene import load_preset
+
+    three_d = (*DRY_PAIR, "mesh.representation='3d'")
+    # the 3D column (three widths: the stress's share of a pressure change
+    # lagged) is iterated once a step by default, and grad(U) cached (once a
+    # step); a lateral orifice keeps three passes (at one pass the thin 3D
+    # lateral silo's step, set by the air, fell to 6 us by t = 0.27 s)
+    scene = load_preset("zhou-cyl-bottom", list(three_d))
+    assert scene.stress_pressure_coupling == "lagged" and scene.outer_correctors == 1
+    assert scene.cache_gradients
+    lateral = load_preset("zhou-cyl-lateral-rect")
+    assert lateral.stress_pressure_coupling == "lagged" and lateral.outer_correctors == 3
 
     rates, cpu = {}, {}
     for rep in ("axisymmetric", "3d"):
@@ -382,26 +394,14 @@ def test_axisymmetric_and_3d_dry_runs_give_the_same_rate(tmp_path, capsys, openf
     assert rates["3d"] == pytest.approx(rates["axisymmetric"], rel=0.05)
     # the wedge is the cheap one (measured ratio ~14)
     assert cpu["3d"] > 5 * cpu["axisymmetric"]
-    # the 3D column (three widths: the stress's share of a pressure change
-    # lagged) is iterated once a step by default; three passes give the same
-    # rate within 0.5%, issue 17's bound on what a change of numerics may move
-    # Q by (measured: 0.04%, at three times the CPU time)
-    from foamsilo.scene import load_preset
-
-    scene = load_preset("zhou-cyl-bottom", [*DRY_PAIR, "mesh.representation='3d'"])
-    assert scene.stress_pressure_coupling == "lagged" and scene.outer_correctors == 1
-    # at one pass grad(U) is cached (once a step): the run without the cache is
-    # the same to the last digit of the orifice flux
-    assert scene.cache_gradients
-    sets = (*DRY_PAIR, "mesh.representation='3d'", "numerics.cache_gradients=false")
-    run_case(CaseSpec(tmp_path / "3d-uncached", "zhou-cyl-bottom", sets), of=openfoam)
+    # the run without the cache is the same to the last digit of the orifice flux
+    run_case(CaseSpec(tmp_path / "3d-uncached", "zhou-cyl-bottom",
+                      (*three_d, "numerics.cache_gradients=false")), of=openfoam)  # fmt: skip
     flux = "postProcessing/orificeFlow/0/surfaceFieldValue.dat"
     assert (tmp_path / "3d" / flux).read_bytes() == (tmp_path / "3d-uncached" / flux).read_bytes()
-    # (a lateral orifice keeps three: at one pass the thin 3D lateral silo's
-    # step, set by the air, fell to 6 us by t = 0.27 s)
-    lateral = load_preset("zhou-cyl-lateral-rect")
-    assert lateral.stress_pressure_coupling == "lagged" and lateral.outer_correctors == 3
-    sets = (*DRY_PAIR, "mesh.representation='3d'", "numerics.outer_correctors=3")
-    three = run_case(CaseSpec(tmp_path / "3d-three", "zhou-cyl-bottom", sets), of=openfoam)
+    # three passes give the same rate within 0.5%, issue 17's bound on what a
+    # change of numerics may move Q by (measured: 0.04%, at three times the CPU time)
+    three = run_case(CaseSpec(tmp_path / "3d-three", "zhou-cyl-bottom",
+                              (*three_d, "numerics.outer_correctors=3")), of=openfoam)  # fmt: skip
     assert three.as_json()["steady"]
     assert rates["3d"] == pytest.approx(three.as_json()["Q"], rel=0.005)
