@@ -353,7 +353,7 @@ def test_a_rate_swinging_from_step_to_step_is_warned_of(finished, tmp_path):
     assert code == 0 and s["steady"], s
     assert s["Q_step_swing"] < 0.01 and not any("swings" in w for w in s["warnings"])
     code, s = cli("post", str(swinging))
-    assert code == 0 and s["steady"], s  # the mean is as flat as before
+    assert code == 0 and s["steady"], s["steady_reason"]  # the mean is as flat as before
     # +-a every step: the step-to-step change is 2a, over sqrt(2): sqrt(2) a
     assert s["Q_step_swing"] == pytest.approx(0.03 * np.sqrt(2), rel=0.05)
     assert any("swings by 4.2%" in w for w in s["warnings"]), s["warnings"]

@@ -164,7 +164,9 @@ def find_steady(d: Discharge, scene: Scene) -> SteadyState:
         tt, qq = t[: i1 + 1], q[: i1 + 1]
         smooth = _smooth(tt, qq, width)
         later = (tt >= 0.5 * (tt[idx[0]] + tt[-1])) & (tt > START * T)
-        q_ref = float(np.median(qq[later]))
+        # the plateau from the smoothed rate: the raw rate's median sits on
+        # one branch of a rate that swings from step to step at a constant step
+        q_ref = float(np.median(smooth[later]))
         # the end of the discharge: where the smoothed rate has left the
         # excursion band for good once the silo is nearly empty, the window
         # ends half a smoothing width before (the smoothing spreads the fall)
