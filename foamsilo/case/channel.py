@@ -178,7 +178,7 @@ def mesh_channel(channel: Channel, scene: Scene, case: Path, of: OpenFOAM) -> Me
         run_utility(of, case, "postProcess", "-func", fo, "-time", "0", log_name=fo)
     g, rho_g = scene.gravity, scene.material.density
     if channel.geometry == "plane":
-        rho = np.where(channel.row_centres() < channel.depth, rho_g, scene.air.density)
+        rho = np.where(channel.row_centres() < channel.depth, rho_g, scene.void_density)
         # p_rgh = p - rho g_x x falls by rho g sin(theta) L over one period
         jumps = -rho * g * math.sin(channel.theta) * channel.length
         jump = f"nonuniform List<scalar> {len(jumps)}({' '.join(f'{j:.12g}' for j in jumps)})"

@@ -110,7 +110,7 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "solver": SOLVER_NAME,
         "eta_max": scene.eta_max,
         "p_min": scene.p_min,
-        "nu_air": scene.air.viscosity / scene.air.density,
+        "nu_air": scene.air.viscosity / scene.void_density,
         "constraint_patches": constraint,
         "axis_x": x_axis,
         "mid_depth": 0.5 * depth

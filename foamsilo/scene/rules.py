@@ -32,6 +32,13 @@ def validate(scene: Scene) -> None:
             "material.viscosity_cap_scaled [x rho_p sqrt(g L^3)]",
         )
     _validate_rheology(scene)
+    void = scene.void_density
+    if void > 0.1 * m.density:
+        raise SceneError(
+            "numerics.void_density",
+            f"got {void:g} kg/m^3; allowed: > 0 and <= material.density/10 "
+            f"({0.1 * m.density:g} kg/m^3): the light phase must stay light beside the grains",
+        )
     growth = scene.outer_growth_limit
     if growth and (growth <= 1 or scene.stress_pressure_coupling != "implicit"):
         raise SceneError(

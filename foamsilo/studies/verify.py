@@ -126,9 +126,9 @@ def channel_scene(entry: dict[str, Any], channel: Channel, extra: Sequence[str] 
 
 
 def loaded_depth(scene: Scene, channel: Channel) -> float:
-    """Return h' = h + rho_air h_air / rho, the depth whose weight the base carries."""
+    """Return h' = h + rho_void h_void / rho, the depth whose weight the base carries."""
     air = channel.height - channel.depth
-    return channel.depth + scene.air.density * air / scene.material.density
+    return channel.depth + scene.void_density * air / scene.material.density
 
 
 def exact_velocity(law: str, scene: Scene, channel: Channel, y: np.ndarray) -> np.ndarray:
