@@ -27,6 +27,14 @@ from foamsilo.pipeline import Budget, CaseSpec, run_many
 from foamsilo.scene import load_preset
 
 
+def _ran(specs: list[CaseSpec], cores: int = 2) -> list:
+    """Run the cases; each must end without an error and with a summary."""
+    outs = run_many(specs, Budget(cores=cores))
+    for o in outs:
+        assert o.status == "ok" and o.summary is not None, o.error
+    return outs
+
+
 def test_the_light_phase_s_density_by_scene():
     # dry planar and axisymmetric: a hundredth of the grains'
     assert load_preset("zhou-planar").void_density == pytest.approx(25.0)
@@ -59,9 +67,8 @@ def test_the_lab_silo_s_rate_is_the_pressure_solve_s_not_its_tolerance(tmp_path,
         CaseSpec(tmp_path / "tight", "zhou-cyl-bottom", (*LAB, "numerics.p_tolerance=1e-10")),
         CaseSpec(tmp_path / "air", "zhou-cyl-bottom", (*LAB, "numerics.void_density=1.2")),
     ]
-    default, tight, air = run_many(specs, Budget(cores=2))
+    default, tight, air = _ran(specs)
     for o in (default, tight, air):
-        assert o.status == "ok" and o.summary is not None, o.error
         assert o.summary["steady"], o.summary["steady_reason"]
     q_tight = tight.summary["Q"]
     assert default.summary["Q"] == pytest.approx(q_tight, rel=0.002)
@@ -87,9 +94,7 @@ def test_the_planar_free_surface_does_not_burst(tmp_path, solver):
         CaseSpec(tmp_path / "heavier", "zhou-planar", (*PLANAR, "numerics.void_density=62.5")),
         CaseSpec(tmp_path / "air", "zhou-planar", (*PLANAR, "numerics.void_density=1.2")),
     ]
-    default, heavier, air = run_many(specs, Budget(cores=2))
-    for o in (default, heavier, air):
-        assert o.status == "ok" and o.summary is not None, o.error
+    default, heavier, air = _ran(specs)
     for o in (default, heavier):
         assert o.summary["steady"], o.summary["steady_reason"]
     assert heavier.summary["Q"] == pytest.approx(default.summary["Q"], rel=0.002)
@@ -108,6 +113,5 @@ def test_the_lagged_wedge_starts_up_without_blowing_up(tmp_path, solver):
     sets = ("mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05",
             "numerics.stress_pressure_coupling='lagged'", "run.max_step_retakes=0",
             "run.max_recoveries=0")  # fmt: skip
-    (out,) = run_many([CaseSpec(tmp_path / "lagged", "zhou-cyl-bottom", sets)], Budget(cores=1))
-    assert out.status == "ok" and out.summary is not None, out.error
+    (out,) = _ran([CaseSpec(tmp_path / "lagged", "zhou-cyl-bottom", sets)], cores=1)
     assert out.summary["run"]["recoveries"] == [] and out.summary["run"]["step_retakes"] == []

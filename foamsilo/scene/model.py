@@ -42,10 +42,8 @@ Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 P_TOLERANCE = 1e-7
 FEEDER_P_TOLERANCE = 1e-10
 #: The light phase's density in the volume-of-fluid mixture of a dry planar
-#: or axisymmetric scene, as a fraction of the grains' (Scene.void_density):
-#: with air's own the pressure solve's absolute tolerance is met in the light
-#: phase and Q is off by 1-7%, and the air above a planar free surface
-#: bursts (docs/solver.md, "The light phase's density")
+#: or axisymmetric scene, as a fraction of the grains' (Scene.void_density;
+#: why not air's own: docs/solver.md, "The light phase's density")
 VOID_DENSITY_FRACTION = 0.01
 
 
@@ -748,12 +746,10 @@ class Scene:
 
         The phase above the grains is passive in a dry scene; its density
         only has to be small beside the grains'. With air's own the
-        projection's coefficient 1/rho spans three decades and the pressure
-        solve's absolute tolerance is met in the light phase while the grains'
-        pressure is still off: Q moved by 1% on the lab silo and 7% on the thin
-        lateral silo, and as much as a tolerance of 1e-10 moves it
-        (docs/solver.md). Not measured yet in 3D and with gas coupling, which
-        keep air's.
+        projection's coefficient 1/rho spans three decades, and the pressure
+        solve's absolute tolerance leaves the grains' pressure off
+        (docs/solver.md, "The light phase's density"). 3D and gas-coupled
+        scenes keep air's: not measured there.
         """
         if self.numerics.void_density is not None:
             return self.numerics.void_density
