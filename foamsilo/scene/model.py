@@ -41,8 +41,8 @@ Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 #: through a feeder (Scene.p_tolerance)
 P_TOLERANCE = 1e-7
 FEEDER_P_TOLERANCE = 1e-10
-#: The light phase's density in the volume-of-fluid mixture of a dry planar
-#: or axisymmetric scene, as a fraction of the grains' (Scene.void_density;
+#: The light phase's density in the volume-of-fluid mixture of a planar or
+#: axisymmetric scene, as a fraction of the grains' (Scene.void_density;
 #: why not air's own: docs/solver.md, "The light phase's density")
 VOID_DENSITY_FRACTION = 0.01
 
@@ -477,8 +477,8 @@ class Numerics:
     )
     void_density: float | None = _f(
         "density of the light phase above the grains in the volume-of-fluid mixture; "
-        "default material.density/100 in dry planar and axisymmetric scenes, air.density "
-        "in gas-coupled and 3D ones (why: docs/solver.md, 'The light phase's density'); "
+        "default material.density/100 in planar and axisymmetric scenes, air.density "
+        "in 3D ones (why: docs/solver.md, 'The light phase's density'); "
         "at most material.density/10. The pore pressure keeps air.density",
         "kg/m^3",
         gt=0,
@@ -748,12 +748,13 @@ class Scene:
         only has to be small beside the grains'. With air's own the
         projection's coefficient 1/rho spans three decades, and the pressure
         solve's absolute tolerance leaves the grains' pressure off
-        (docs/solver.md, "The light phase's density"). 3D and gas-coupled
-        scenes keep air's: not measured there.
+        (docs/solver.md, "The light phase's density"). The same holds with
+        a pore pressure, which keeps air's density. 3D scenes keep air's:
+        not measured there.
         """
         if self.numerics.void_density is not None:
             return self.numerics.void_density
-        if self.gas_coupled or self.representation == "3d":
+        if self.representation == "3d":
             return self.air.density
         return VOID_DENSITY_FRACTION * self.material.density
 
