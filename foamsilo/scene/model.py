@@ -750,7 +750,8 @@ class Scene:
         solve's absolute tolerance leaves the grains' pressure off
         (docs/solver.md, "The light phase's density"). The same holds with
         a pore pressure, which keeps air's density. 3D scenes keep air's:
-        not measured there.
+        the rates measured there did not move with it, and the pressure
+        solve took more iterations with the heavier phase.
         """
         if self.numerics.void_density is not None:
             return self.numerics.void_density
