@@ -744,12 +744,12 @@ class Scene:
     def void_density(self) -> float:
         """Density of the mixture's light phase (``numerics.void_density`` resolved).
 
-        The phase above the grains is passive in a dry scene; its density
-        only has to be small beside the grains'. With air's own the
-        projection's coefficient 1/rho spans three decades, and the pressure
-        solve's absolute tolerance leaves the grains' pressure off
-        (docs/solver.md, "The light phase's density"). The same holds with
-        a pore pressure, which keeps air's density. 3D scenes keep air's:
+        The phase above the grains is passive (a pore pressure keeps air's
+        density); its density only has to be small beside the grains'. With
+        air's own the projection's coefficient 1/rho spans three decades,
+        and the pressure solve's absolute tolerance leaves the grains'
+        pressure off (docs/solver.md, "The light phase's density"). 3D
+        scenes keep air's:
         the rates measured there did not move with it, and the pressure
         solve took more iterations with the heavier phase.
         """
