@@ -112,6 +112,11 @@ def test_report_rewritten_from_the_json_alone(tmp_path):
             "zhou-cyl-bottom": {"law": "zhou-eq1", "Q_law": 0.0208,
                                 "rows": rows([36, 48, 72], 0.034, 0.3)},
         },
+        # a row that needed recoveries says so beside its rate
+        "time-step": {"scenes": [{"label": "recovered", "rows": [
+            {"courant": 0.5, "outcome": "steady", "Q": 0.615, "Q_std": 0.001,
+             "Q_step_swing": 1e-4, "dt_median": 1.5e-3, "steps": 908, "recoveries": 2,
+             "cpu_s": 13.0}]}]},
     }  # fmt: skip
     (tmp_path / "suite.json").write_text(json.dumps(result))
     out = rewrite_report(False, tmp_path)
@@ -121,6 +126,8 @@ def test_report_rewritten_from_the_json_alone(tmp_path):
     assert conv["extrapolated"] == pytest.approx(0.034, rel=1e-9)
     md = (tmp_path / "suite.md").read_text()
     assert "extrapolated Q = 0.034" in md and "observed order p = 1.00" in md
+    assert "| steps | recoveries | CPU [s] |" in md
+    assert "| 0.0015 | 908 | 2 | 13 |" in md
     with pytest.raises(FoamsiloError, match="no suite results"):
         rewrite_report(True, tmp_path)
 

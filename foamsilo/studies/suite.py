@@ -989,8 +989,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "(`Q_step_swing`; above 1% the report warns: a numerical oscillation).",
             "",
             "| scene | Courant | outcome | Q | vs default step | spread | swing "
-            "| Δt median [s] | steps | CPU [s] |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+            "| Δt median [s] | steps | recoveries | CPU [s] |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
         for scene in ts["scenes"]:
             for r in scene["rows"]:
@@ -999,7 +999,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                     f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('vs_default_step'), '+.2%')} "
                     f"| {fmt(r.get('spread'), '.2%')} | {fmt(r.get('Q_step_swing'), '.2%')} "
                     f"| {fmt(r.get('dt_median'), '.3g')} "
-                    f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('cpu_s'), '.0f')} |"
+                    f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('recoveries'), 'd')} "
+                    f"| {fmt(r.get('cpu_s'), '.0f')} |"
                 )
         lines.append("")
     lines += [
