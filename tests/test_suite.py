@@ -111,6 +111,9 @@ def test_report_rewritten_from_the_json_alone(tmp_path):
                             "rows": rows([16, 32, 64], 41.0, 80.0)},
             "zhou-cyl-bottom": {"law": "zhou-eq1", "Q_law": 0.0208,
                                 "rows": rows([36, 48, 72], 0.034, 0.3)},
+            # a hopper has no analytic law (its entry: law = false)
+            "hopper-conical": {"law": None, "Q_law": None,
+                               "rows": rows([40, 80, 160], 0.61, 1.0)},
         },
         # a row that needed recoveries says so beside its rate
         "time-step": {"scenes": [{"label": "recovered", "rows": [
@@ -127,6 +130,9 @@ def test_report_rewritten_from_the_json_alone(tmp_path):
     md = (tmp_path / "suite.md").read_text()
     assert "extrapolated Q = 0.034" in md and "observed order p = 1.00" in md
     assert "| steps | recoveries | CPU [s] |" in md
+    assert "**hopper-conical** (no analytic law)" in md
+    assert out["work-precision"]["hopper-conical"]["convergence"]["extrapolated"] == pytest.approx(
+        0.61, rel=1e-9)  # fmt: skip
     assert "| 0.0015 | 908 | 2 | 13 |" in md
     with pytest.raises(FoamsiloError, match="no suite results"):
         rewrite_report(True, tmp_path)

@@ -145,7 +145,9 @@ def work_precision(
         preset = entry["preset"]
         cells, cases = _series(entry, quick)
         rows = run_rows(cases, work / name, jobs, limit, on_row)
-        law_name, q_law = open_top_law(load_preset(preset))
+        # a scene with no analytic law (a hopper) says so in its entry
+        law_name, q_law = (None, None) if entry.get("law") is False else open_top_law(
+            load_preset(preset))  # fmt: skip
         for r, n in zip(rows, cells, strict=True):
             r["cells_across"] = n
         out[name] = {"law": law_name, "Q_law": q_law, "rows": rows}
@@ -172,7 +174,7 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     for r in rows:
         q = r.get("Q")
         r["err_vs_finest"] = abs(q / q_fin - 1) if q and q_fin else None
-        r["err_vs_law"] = q / data["Q_law"] - 1 if q else None
+        r["err_vs_law"] = q / data["Q_law"] - 1 if q and data.get("Q_law") else None
         r["err_vs_extrapolated"] = None
     cells = [r["cells_across"] for r in rows]
     errs = [r["err_vs_finest"] if r["err_vs_finest"] is not None else math.inf for r in rows]
@@ -864,8 +866,10 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         ]
         for preset, data in wp.items():
             about = f" {data['about']}" if data.get("about") else ""
+            law = (f"law: {data['law']}, Q = {data['Q_law']:.5g}" if data.get("Q_law")
+                   else "no analytic law")  # fmt: skip
             lines += [
-                f"**{preset}**{about} (law: {data['law']}, Q = {data['Q_law']:.5g}); resolution "
+                f"**{preset}**{about} ({law}); resolution "
                 f"for 5%: {data['recommend_5pct'] or 'none'} across, for 2%: "
                 f"{data['recommend_2pct'] or 'none'} across (against the finest run).",
                 "",
