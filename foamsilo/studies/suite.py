@@ -717,7 +717,11 @@ def plot_work_precision(result: dict[str, Any], path: Path) -> None:
     wp = result.get("work-precision")
     if not wp:
         return
-    fig, ax = subplots(size=(6, 4.2))
+    import matplotlib.pyplot as plt
+
+    fig, ax = subplots(size=(7, 5.5))
+    # more series than the default cycle's ten colours: one colour each
+    ax.set_prop_cycle(color=[plt.get_cmap("tab20")(i) for i in range(20)])
     for preset, data in wp.items():
         rows = [r for r in data["rows"][:-1] if r.get("err_vs_finest")]
         labelled_loglog(ax, rows, "wall_s", "err_vs_finest", "cells_across", f"{preset} (N across)")
@@ -725,7 +729,7 @@ def plot_work_precision(result: dict[str, Any], path: Path) -> None:
         ax.axhline(level, color="0.6", ls=":", lw=1)
     ax.set_xlabel("wall time per case [s] (one core)")
     ax.set_ylabel("|Q - Q(finest)| / Q(finest) [%]")
-    finish(fig, ax, path)
+    finish(fig, ax, path, legend_size=6)
 
 
 def plot_beverloo(result: dict[str, Any], path: Path) -> None:
