@@ -42,7 +42,7 @@ def test_the_light_phase_s_density_by_scene():
     assert load_preset("zhou-cyl-bottom").void_density == pytest.approx(15.0)
     assert load_preset("zhou-planar-gas").void_density == pytest.approx(25.0)
     assert load_preset("zhou-rect-bottom").void_density == pytest.approx(15.0)
-    # 3D: the air's own (Q did not move with the heavier phase there, docs/solver.md)
+    # 3D: the air's own (docs/solver.md, "The light phase's density")
     assert load_preset("venier-test1", ["mesh.representation='3d'"]).void_density == 1.2
     # the key wins; the pore pressure keeps air.density either way
     scene = load_preset("zhou-cyl-bottom", ["numerics.void_density=4.0"])

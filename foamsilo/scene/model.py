@@ -744,14 +744,13 @@ class Scene:
     def void_density(self) -> float:
         """Density of the mixture's light phase (``numerics.void_density`` resolved).
 
-        The phase above the grains is passive (a pore pressure keeps air's
-        density); its density only has to be small beside the grains'. With
-        air's own the projection's coefficient 1/rho spans three decades,
-        and the pressure solve's absolute tolerance leaves the grains'
-        pressure off (docs/solver.md, "The light phase's density"). 3D
-        scenes keep air's:
-        the rates measured there did not move with it, and the pressure
-        solve took more iterations with the heavier phase.
+        The phase above the grains is passive (the pore pressure's gas keeps
+        ``air.density`` whatever this is); its density only has to be small
+        beside the grains'. With air's own the projection's coefficient 1/rho
+        spans three decades, and the pressure solve's absolute tolerance
+        leaves the grains' pressure off. 3D scenes keep air's. Why, and
+        what each choice was measured to do: docs/solver.md, "The light
+        phase's density".
         """
         if self.numerics.void_density is not None:
             return self.numerics.void_density
