@@ -25,13 +25,14 @@ RETAKE_ALPHA_EXCURSION = 0.5
 #: ... or when the step ends with a Courant number this many times its limit
 #: (the controller never grows the step by more than 1.2 per step)
 RETAKE_COURANT_FACTOR = 20.0
-#: ... but not in the start-up (the first this many discharge times sqrt(D/g):
-#: the steady window's start-up, ``foamsilo.post.steady.START``) of a scene
-#: that iterates each step: a failed step there is the mu(I) Picard iteration
-#: not converging along the start-up's path, which a retake does not cure (the
-#: start-up then crawls at small steps); the runner's recovery iterates the
-#: start-up again from the last written time (docs/solver.md)
-RETAKE_AFTER_START = 1.0
+#: The start-up, in discharge times sqrt(D/g): the steady window's
+#: (``foamsilo.post.steady.START``). No retake in it for a scene that iterates
+#: each step: a failed step there is the mu(I) Picard iteration not converging
+#: along the start-up's path, which a retake does not cure (the start-up then
+#: crawls at small steps); the runner's recovery iterates the start-up again
+#: from the last written time. And its steps may take their own face mean of
+#: the viscosity (``numerics.start_up_viscosity_interpolation``; docs/solver.md)
+START_UP = 1.0
 #: The solver's retakes (``run.max_step_retakes``) are counted over this many
 #: discharge times, not per step: a retake that fixes the failed step but
 #: leaves a field it cannot heal fails the steps after it, each retaken at a
@@ -148,9 +149,8 @@ def template_context(scene: Scene) -> dict[str, Any]:
         "retake_alpha_excursion": RETAKE_ALPHA_EXCURSION,
         "retake_courant_factor": RETAKE_COURANT_FACTOR,
         "retake_window": RETAKE_WINDOW * scene.discharge_time_scale,
-        "retake_from": RETAKE_AFTER_START * scene.discharge_time_scale
-        if scene.outer_correctors > 1
-        else 0.0,
+        "retake_from": START_UP * scene.discharge_time_scale if scene.outer_correctors > 1 else 0.0,
+        "start_up_end": START_UP * scene.discharge_time_scale,
     }
 
 

@@ -550,6 +550,14 @@ class Numerics:
         "verification at a free surface (docs/solver.md)",
         default="linear",
     )
+    start_up_viscosity_interpolation: Literal["linear", "harmonic"] = _f(
+        "the same mean in the start-up only (the steps that start within the first "
+        "discharge time sqrt(D/g), which the steady window leaves out); after it the faces "
+        "take viscosity_interpolation's. Harmonic keeps the capped cells' viscosity out of "
+        "the faces of the yielding cells beside them while the flow starts (why: "
+        "docs/solver.md)",
+        default="harmonic",
+    )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
