@@ -140,21 +140,34 @@ def test_the_face_viscosity_reaches_the_solver(tmp_path):
 
 
 def test_the_start_up_face_viscosity_reaches_the_solver_with_the_start_ups_end(tmp_path):
-    """numerics.start_up_viscosity_interpolation and the start-up's end, one discharge time."""
+    """numerics.start_up_viscosity_interpolation and the start-up's end, one discharge time.
+
+    By default harmonic in an axisymmetric scene, linear in planar and 3D
+    ones; a value given is taken in any.
+    """
     from foamsilo.case.templates import START_UP
     from foamsilo.foam.dictionary import read_dict
     from foamsilo.post.steady import START
 
     # the start-up the solver's switch ends is the one the steady window skips
     assert START_UP == START
-    for mean in ("linear", "harmonic"):
-        scene = load_preset("hopper-conical", [f"numerics.start_up_viscosity_interpolation={mean}"])
-        render_templates(scene, tmp_path / mean)
-        pimple = read_dict(tmp_path / mean / "system/fvSolution")["PIMPLE"]
-        assert pimple["startUpViscosityInterpolation"] == mean
+    cases = [
+        ("hopper-conical", [], "harmonic"),
+        ("zhou-planar", [], "linear"),
+        ("zhou-cyl-lateral-rect", [], "linear"),
+        ("hopper-conical", ["numerics.start_up_viscosity_interpolation=linear"], "linear"),
+        ("zhou-cyl-lateral-rect", ["numerics.start_up_viscosity_interpolation=harmonic"],
+         "harmonic"),
+    ]  # fmt: skip
+    for k, (preset, overrides, mean) in enumerate(cases):
+        scene = load_preset(preset, overrides)
+        render_templates(scene, tmp_path / str(k))
+        pimple = read_dict(tmp_path / str(k) / "system/fvSolution")["PIMPLE"]
+        assert pimple["startUpViscosityInterpolation"] == mean, (preset, overrides)
         assert pimple["viscosityInterpolation"] == "linear"
-        # sqrt(D/g), the hopper's outlet D = 30 mm
-        assert float(pimple["startUpEnd"]) == pytest.approx((0.03 / 9.81) ** 0.5, rel=1e-9)
+    # sqrt(D/g), the hopper's outlet D = 30 mm
+    hopper = read_dict(tmp_path / "0" / "system/fvSolution")["PIMPLE"]
+    assert float(hopper["startUpEnd"]) == pytest.approx((0.03 / 9.81) ** 0.5, rel=1e-9)
 
 
 def test_the_outer_growth_limit_follows_the_coupling(tmp_path):

@@ -550,13 +550,14 @@ class Numerics:
         "verification at a free surface (docs/solver.md)",
         default="linear",
     )
-    start_up_viscosity_interpolation: Literal["linear", "harmonic"] = _f(
+    start_up_viscosity_interpolation: Literal["linear", "harmonic"] | None = _f(
         "the same mean in the start-up only (the steps that start within the first "
         "discharge time sqrt(D/g), which the steady window leaves out); after it the faces "
         "take viscosity_interpolation's. Harmonic keeps the capped cells' viscosity out of "
-        "the faces of the yielding cells beside them while the flow starts (why: "
-        "docs/solver.md)",
-        default="harmonic",
+        "the faces of the yielding cells beside them while the flow starts. Default: "
+        "harmonic in axisymmetric scenes, linear in planar and 3D ones (why: "
+        "docs/solver.md, 'The start-up's face mean')",
+        default=None,
     )
     stress_pressure_coupling: Literal["implicit", "lagged"] | None = _f(
         "the granular stress's share of a pressure change in the projection: taken "
@@ -765,6 +766,18 @@ class Scene:
         if self.representation == "3d":
             return self.air.density
         return VOID_DENSITY_FRACTION * self.material.density
+
+    @property
+    def start_up_viscosity_interpolation(self) -> str:
+        """The start-up's face mean (``numerics.start_up_viscosity_interpolation`` resolved).
+
+        Harmonic in axisymmetric scenes, linear in planar and 3D ones. Why,
+        and what each choice was measured to do: docs/solver.md, "The
+        start-up's face mean".
+        """
+        if self.numerics.start_up_viscosity_interpolation is not None:
+            return self.numerics.start_up_viscosity_interpolation
+        return "harmonic" if self.representation == "axisymmetric" else "linear"
 
     @property
     def p_tolerance(self) -> float:
