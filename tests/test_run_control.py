@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import multiprocessing
 import socket
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -187,3 +190,60 @@ def test_pyfoam_timers_that_rearm_themselves_are_stopped():
     _stop_pyfoam_timers(thrd)
     time.sleep(0.3)
     assert not thrd.timer2.is_alive()
+
+
+def _start_runner_together(barrier: Any, case: str, answers: Any) -> None:
+    """One run's first steps: the runner's start (refused before the solver), then PyFoam's log."""
+    import time
+
+    from PyFoam.Infrastructure import Hardcoded
+    from PyFoam.Infrastructure.Logging import foamLogger
+
+    from foamsilo.errors import UsageError
+    from foamsilo.run.runner import run_solver
+
+    makedirs = Hardcoded.makedirs
+
+    def slow_makedirs(*args: Any, **kwargs: Any) -> None:
+        time.sleep(0.2)  # a slow file system: every run checks before any creates
+        makedirs(*args, **kwargs)
+
+    Hardcoded.makedirs = slow_makedirs
+    barrier.wait()
+    try:
+        with contextlib.suppress(UsageError):  # n_procs = 0: refused after the runner's set-up
+            run_solver(Path(case), None, None, n_procs=0)  # type: ignore[arg-type]
+        foamLogger()  # what PyFoam's runner does first
+        answers.put("ok")
+    except Exception as exc:  # noqa: BLE001 - the answer is the exception's name
+        answers.put(type(exc).__name__)
+
+
+def test_runs_started_together_on_a_fresh_machine_do_not_race_for_pyfoam_s_log(
+    tmp_path, monkeypatch
+):
+    """Two cases started at once by ``--jobs 2`` on a fresh machine: one stopped with FileExistsError.
+
+    PyFoam makes its log directory by a check and then ``os.makedirs``; here that
+    window is widened to 0.2 s, as on a slow file system, and four runs start
+    together on a fresh home directory (a user other than root, whose log
+    directory would be /var/log/pyFoam). Without the runner making the directory
+    first, three of the four stop with FileExistsError.
+    """
+    ctx = multiprocessing.get_context("fork")
+    monkeypatch.setenv("USER", "foamsilo-test")
+    monkeypatch.setenv("HOME", str(tmp_path))
+    barrier, answers = ctx.Barrier(4), ctx.Queue()
+    procs = [
+        ctx.Process(
+            target=_start_runner_together, args=(barrier, str(tmp_path / "no-case"), answers)
+        )
+        for _ in range(4)
+    ]
+    for p in procs:
+        p.start()
+    got = [answers.get(timeout=60) for _ in procs]
+    for p in procs:
+        p.join()
+    assert got == ["ok"] * 4
+    assert (tmp_path / ".pyFoam" / "log").is_dir()

@@ -159,6 +159,24 @@ class RunResult:
         return d
 
 
+def pyfoam_log_directory() -> Path:
+    """Make PyFoam's log directory, safely against other runs starting at the same moment.
+
+    PyFoam makes it on first use by a check and then ``os.makedirs``: two runs started
+    together on a fresh machine race there, and the loser stops with a FileExistsError.
+
+    Returns
+    -------
+    Path
+        The directory (``/var/log/pyFoam`` for root, ``~/.pyFoam/log`` otherwise).
+    """
+    from PyFoam.Infrastructure.Hardcoded import logDirectory
+
+    path = Path(logDirectory())
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 def modifiable_while_running(case: Path) -> None:
     """Let the solver read ``system/`` dictionaries changed while it runs.
 
@@ -314,6 +332,7 @@ def run_solver(
     from PyFoam.Execution.BasicRunner import BasicRunner
     from PyFoam.RunDictionary.SolutionDirectory import SolutionDirectory
 
+    pyfoam_log_directory()
     case = Path(case).resolve()
     if n_procs < 1:
         raise UsageError("--np", f"{n_procs} ranks; allowed: an integer >= 1")
