@@ -253,10 +253,13 @@ def case_report(summary: RunSummary) -> Path:
         share_retakes = run.get("share_retakes") or []
         if share_retakes:
             growth = max(r["growth"] for r in share_retakes)
+            change = max(r.get("change", 0.0) for r in share_retakes)
             out += [
                 f"The solver took {len(share_retakes)} step(s) again at the same step with half "
                 "the stress's divergence share, their outer iterations growing (by up to "
-                f"{_fmt(growth, '.3g')} times; `numerics.outer_growth_limit`, docs/solver.md).",
+                f"{_fmt(growth, '.3g')} times; `numerics.outer_growth_limit`) or the last moving "
+                f"a grain too far (up to {_fmt(100 * change, '.3g')}% of the fastest grain's "
+                "speed; `numerics.outer_change_limit`; docs/solver.md).",
                 "",
             ]
             failed = [r for r in share_retakes if r.get("failed")]

@@ -170,24 +170,28 @@ def test_the_start_up_face_viscosity_reaches_the_solver_with_the_start_ups_end(t
     assert float(hopper["startUpEnd"]) == pytest.approx((0.03 / 9.81) ** 0.5, rel=1e-9)
 
 
-def test_the_outer_growth_limit_follows_the_coupling(tmp_path):
+def test_the_outer_growth_and_change_limits_follow_the_coupling(tmp_path):
     """By default a step is taken again at half the share only where there is one.
 
     With the implicit stress-pressure coupling (the wedges, wall friction, tall
-    columns) siloFoam gets ``outerGrowthLimit`` 2; with the lagged one (the
-    planar silo) 0, never; a scene's own value is written as given.
+    columns) siloFoam gets ``outerGrowthLimit`` 2 and ``outerChangeLimit``
+    0.05; with the lagged one (the planar silo) 0 and 0, never; a scene's own
+    values are written as given.
     """
     from foamsilo.foam.dictionary import read_dict
 
     cases = [
-        ("zhou-cyl-bottom", [], 2.0),
-        ("zhou-rect-bottom", [], 2.0),
-        ("zhou-planar", [], 0.0),
-        ("zhou-planar", ["numerics.stress_pressure_coupling=implicit"], 2.0),
-        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=0"], 0.0),
-        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=5"], 5.0),
+        ("zhou-cyl-bottom", [], 2.0, 0.05),
+        ("zhou-rect-bottom", [], 2.0, 0.05),
+        ("zhou-planar", [], 0.0, 0.0),
+        ("zhou-planar", ["numerics.stress_pressure_coupling=implicit"], 2.0, 0.05),
+        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=0"], 0.0, 0.05),
+        ("zhou-cyl-bottom", ["numerics.outer_growth_limit=5"], 5.0, 0.05),
+        ("zhou-cyl-bottom", ["numerics.outer_change_limit=0"], 2.0, 0.0),
+        ("zhou-cyl-bottom", ["numerics.outer_change_limit=0.2"], 2.0, 0.2),
     ]
-    for k, (preset, sets, limit) in enumerate(cases):
+    for k, (preset, sets, growth, change) in enumerate(cases):
         render_templates(load_preset(preset, sets), tmp_path / str(k))
         pimple = read_dict(tmp_path / str(k) / "system/fvSolution")["PIMPLE"]
-        assert float(pimple["outerGrowthLimit"]) == limit, (preset, sets)
+        assert float(pimple["outerGrowthLimit"]) == growth, (preset, sets)
+        assert float(pimple["outerChangeLimit"]) == change, (preset, sets)

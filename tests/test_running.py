@@ -256,17 +256,24 @@ def test_a_step_taken_again_from_its_saved_start_ends_where_it_first_did(
     assert times == sorted(set(times))  # one row per step: the check's pass dropped
 
 
-def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(tmp_path, solver):
+@pytest.mark.parametrize(("criterion", "limit"), [("growth", 1.02), ("change", 0.003)])
+def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(
+    tmp_path, solver, criterion, limit
+):
     # the lab wedge with a growth limit just above 1 (numerics.outer_growth_limit;
     # its outer iterations' velocity change grows from the second to the third
-    # in many steps, docs/solver.md): those steps are taken again from their
+    # in many steps, docs/solver.md), or a change limit below what its last
+    # outer iterations move a grain by in many steps (numerics.outer_change_limit),
+    # the other criterion off: those steps are taken again from their
     # start, at the same step, with half the divergence share, once each and
     # not in the first discharge time, with more outer iterations; each such
     # step, checked, ends where it first did (run.retake_check_interval)
+    other = "change" if criterion == "growth" else "growth"
     case = tmp_path / "share"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
                   *sets(["mesh.cells_across=36", "run.end_time=0.08", "run.write_interval=0.08",
-                         "numerics.outer_growth_limit=1.02", "run.retake_check_interval=1",
+                         f"numerics.outer_{criterion}_limit={limit}",
+                         f"numerics.outer_{other}_limit=0", "run.retake_check_interval=1",
                          "run.max_recoveries=0"]))  # fmt: skip
     assert code == 0, s.get("error")
     share = s["run"]["share_retakes"]
@@ -276,7 +283,7 @@ def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(t
     assert len(set(starts)) == len(starts)  # once per step
     discharge_time = (0.01 / 9.81) ** 0.5  # sqrt(D/g), the lab silo's D = 10 mm
     assert min(starts) >= discharge_time * (1 - 1e-9)
-    assert all(r["growth"] > 1.02 for r in share)
+    assert all(r[criterion] > limit for r in share)
     # with four times the scene's three outer iterations, and its check's
     # pass the same; no other step goes past three
     assert log.count("PIMPLE: iteration 12\n") == 2 * len(share)
@@ -306,7 +313,8 @@ def test_a_step_that_fails_at_half_the_share_is_taken_as_the_whole_share_took_it
     for limit in ("2", "0"):
         case = tmp_path / f"limit{limit}"
         code, s = cli("run", "venier-test1", "-o", str(case), "--quiet",
-                      *sets([f"numerics.outer_growth_limit={limit}", AIR_VOID]))  # fmt: skip
+                      *sets([f"numerics.outer_growth_limit={limit}", AIR_VOID,
+                             "numerics.outer_change_limit=0"]))  # fmt: skip
         assert code == 0, s.get("error")
         runs[limit] = (case, s)
     case, s = runs["2"]

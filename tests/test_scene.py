@@ -102,6 +102,8 @@ def test_pressure_floor_default_and_explicit():
         ("numerics.outer_growth_limit=0.5", "numerics.outer_growth_limit", "> 1"),
         # the planar silo's stress is lagged: no share to halve
         ("numerics.outer_growth_limit=2", "numerics.outer_growth_limit", "'implicit'"),
+        ("numerics.outer_change_limit=1.5", "numerics.outer_change_limit", "<= 1"),
+        ("numerics.outer_change_limit=0.05", "numerics.outer_change_limit", "'implicit'"),
     ],
 )
 def test_bad_values_name_the_field_and_the_allowed_range(override, field, allowed):

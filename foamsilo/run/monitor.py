@@ -66,6 +66,10 @@ _RE_SHARE_RETAKE = re.compile(
     + _FLOAT
     + r" \(limit "
     + _FLOAT
+    + r"\), the last moving a grain by "
+    + _FLOAT
+    + r" of the fastest grain's speed \(limit "
+    + _FLOAT
     + r"\), in the step from t = "
     + _FLOAT
     + r" with deltaT = "
@@ -174,8 +178,9 @@ class LogMonitor:
         #: start ``time``, the step that failed and the one it was taken with
         self.retakes: list[dict[str, float | str]] = []
         #: steps taken again with half the stress's divergence share, their
-        #: outer iterations growing (``numerics.outer_growth_limit``): start
-        #: ``time`` and ``growth``, and ``failed`` (why) where the step at half
+        #: outer iterations growing or the last moving a grain too far
+        #: (``numerics.outer_growth_limit``, ``numerics.outer_change_limit``):
+        #: start ``time``, ``growth`` and ``change``, and ``failed`` (why) where the step at half
         #: the share failed and was taken as the whole share first took it
         self.share_retakes: list[dict[str, float | str]] = []
         #: start of the step that ended the solver's retakes (``Step diverged``):
@@ -305,9 +310,15 @@ class LogMonitor:
             return
         m = _RE_SHARE_RETAKE.match(line)
         if m:
-            self.share_retakes.append({"time": float(m.group(3)), "growth": float(m.group(1))})
+            self.share_retakes.append(
+                {
+                    "time": float(m.group(5)),
+                    "growth": float(m.group(1)),
+                    "change": float(m.group(3)),
+                }
+            )
             self._attempt_alpha_max = -math.inf
-            self._drop_attempt(float(m.group(4)))
+            self._drop_attempt(float(m.group(6)))
             return
         m = _RE_SHARE_FALLBACK.match(line)
         if m:

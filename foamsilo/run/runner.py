@@ -133,9 +133,10 @@ class RunResult:
         ``time``, ``detail``, failed ``delta_t`` and ``retake_delta_t``.
     share_retakes
         The steps the solver took again at the same step with half the
-        stress's divergence share because their outer iterations grew
-        (``numerics.outer_growth_limit``): each one's start ``time`` and
-        ``growth``, and ``failed`` (why) where that step failed and was taken as
+        stress's divergence share because their outer iterations grew or the
+        last moved a grain too far (``numerics.outer_growth_limit``,
+        ``numerics.outer_change_limit``): each one's start ``time``, ``growth``
+        and ``change``, and ``failed`` (why) where that step failed and was taken as
         the whole share first took it.
     """
 

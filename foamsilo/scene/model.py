@@ -33,6 +33,10 @@ EMPTIED_FILL = 0.5
 #: (Scene.outer_growth_limit; the choice and its effect on the suite's rows:
 #: docs/solver.md, "Half the share for a step whose outer iterations grow")
 OUTER_GROWTH_LIMIT = 2.0
+#: ... or whose last outer iteration moves a grain by more than this share of
+#: the fastest grain's speed (Scene.outer_change_limit; the choice and its
+#: effect: docs/solver.md, "Bursts in the uniform 96-across lab silo")
+OUTER_CHANGE_LIMIT = 0.05
 
 Representation = Literal["auto", "planar", "axisymmetric", "3d"]
 
@@ -593,6 +597,18 @@ class Numerics:
         le=100,
         default=None,
     )
+    outer_change_limit: float | None = _f(
+        "with the implicit stress-pressure coupling: a step whose last outer iteration "
+        "moves a grain (a cell with alpha > 1/2) by more than this share of the fastest "
+        "grain's speed (a burst starting in a few cells, which the rms growth of "
+        "numerics.outer_growth_limit hardly sees) is taken again as that key takes it; "
+        "0: never, else <= 1 (what it does: docs/solver.md); default: 0.05 with the "
+        "implicit coupling, else 0",
+        "",
+        ge=0,
+        le=1,
+        default=None,
+    )
     outer_correctors: int | None = _f(
         "PIMPLE outer iterations per step: each re-evaluates the mu(I) viscosity from the "
         "latest pressure and strain rate; default: 1 in planar scenes and in dry 3D ones "
@@ -707,6 +723,13 @@ class Scene:
         if self.numerics.outer_growth_limit is not None:
             return self.numerics.outer_growth_limit
         return OUTER_GROWTH_LIMIT if self.stress_pressure_coupling == "implicit" else 0.0
+
+    @property
+    def outer_change_limit(self) -> float:
+        """``numerics.outer_change_limit`` resolved: 0 (never) without the implicit coupling."""
+        if self.numerics.outer_change_limit is not None:
+            return self.numerics.outer_change_limit
+        return OUTER_CHANGE_LIMIT if self.stress_pressure_coupling == "implicit" else 0.0
 
     @property
     def outer_correctors(self) -> int:

@@ -47,6 +47,14 @@ def validate(scene: Scene) -> None:
             "numerics.stress_pressure_coupling = 'implicit' (the share it halves); this scene's "
             f"coupling: {scene.stress_pressure_coupling}",
         )
+    change = scene.outer_change_limit
+    if change and scene.stress_pressure_coupling != "implicit":
+        raise SceneError(
+            "numerics.outer_change_limit",
+            f"got {change:g}: allowed: 0 (never) or > 0 and <= 1, with "
+            "numerics.stress_pressure_coupling = 'implicit' (the share it halves); this scene's "
+            f"coupling: {scene.stress_pressure_coupling}",
+        )
     if m.grain_diameter >= s.orifice_width:
         raise SceneError(
             "material.grain_diameter",

@@ -194,8 +194,10 @@ int main(int argc, char *argv[])
 
             // Why the step failed (empty: it did not)
             string stepFailure;
-            // The grains' velocity change of each outer iteration (rms)
+            // The grains' velocity change of each outer iteration (rms), and
+            // its largest, over the fastest grain's speed
             DynamicList<scalar> outerChange;
+            DynamicList<scalar> outerMaxChange;
 
             // --- Pressure-velocity PIMPLE corrector loop
             while (pimple.loop())
@@ -206,7 +208,7 @@ int main(int argc, char *argv[])
                 }
 
                 autoPtr<volVectorField> UOuterStart;
-                if (outerGrowthLimit > 0)
+                if (outerGrowthLimit > 0 || outerChangeLimit > 0)
                 {
                     UOuterStart.reset(new volVectorField("UOuterStart", U));
                 }
@@ -269,6 +271,15 @@ int main(int argc, char *argv[])
                            /max(gSum(grains*mesh.V().field()), VSMALL)
                         )
                     );
+                    outerMaxChange.append
+                    (
+                        gMax
+                        (
+                            grains
+                           *mag(U.primitiveField() - UOuterStart().primitiveField())
+                        )
+                       /max(gMax(grains*mag(U.primitiveField())), VSMALL)
+                    );
                 }
             }
 
@@ -286,7 +297,12 @@ int main(int argc, char *argv[])
                 const label n = outerChange.size();
                 const scalar growth =
                     outerChange[n - 1]/max(outerChange[n - 2], VSMALL);
-                if (growth > outerGrowthLimit)
+                const scalar change = outerMaxChange[n - 1];
+                if
+                (
+                    (outerGrowthLimit > 0 && growth > outerGrowthLimit)
+                 || (outerChangeLimit > 0 && change > outerChangeLimit)
+                )
                 {
                     backToStepStart();
                     shareRetaken = true;
@@ -303,7 +319,9 @@ int main(int argc, char *argv[])
                     );
                     Info<< "Step retaken with half the stress share: outer"
                         << " iterations growing by " << growth << " (limit "
-                        << outerGrowthLimit << "), in the step from t = "
+                        << outerGrowthLimit << "), the last moving a grain by "
+                        << change << " of the fastest grain's speed (limit "
+                        << outerChangeLimit << "), in the step from t = "
                         << stepStart.value << " with deltaT = "
                         << runTime.deltaTValue() << nl << endl;
                     continue;
