@@ -259,25 +259,21 @@ int main(int argc, char *argv[])
                 if (UOuterStart.valid())
                 {
                     const scalarField grains(pos(alpha1.primitiveField() - 0.5));
+                    const vectorField dU
+                    (
+                        U.primitiveField() - UOuterStart().primitiveField()
+                    );
                     outerChange.append
                     (
                         Foam::sqrt
                         (
-                            gSum
-                            (
-                                grains*mesh.V().field()
-                               *magSqr(U.primitiveField() - UOuterStart().primitiveField())
-                            )
+                            gSum(grains*mesh.V().field()*magSqr(dU))
                            /max(gSum(grains*mesh.V().field()), VSMALL)
                         )
                     );
                     outerMaxChange.append
                     (
-                        gMax
-                        (
-                            grains
-                           *mag(U.primitiveField() - UOuterStart().primitiveField())
-                        )
+                        gMax(grains*mag(dU))
                        /max(gMax(grains*mag(U.primitiveField())), VSMALL)
                     );
                 }
