@@ -211,17 +211,33 @@ def test_gas_rows_are_judged_on_eq17_with_their_own_zone_gradient():
         row(12.0, 0.0275 * 3.0 * 1.05, zone=8.0),  # eq. 17: sqrt(9) = 3; 5% above it
         row(25.0, 0.0275 * 2.0, zone=8.0),  # a third below eq. 17
         row(4.0, 0.04, zone=1.2, outcome="oscillating", swing=0.2),
+        # near G = -1 (the 190 um closed top): sqrt(1 + G) = 0.276 turns on
+        # 1 + G = 0.076; the force balance stays judged on 1 + |G|
+        row(0.0, 0.0275 * 0.218, zone=-0.924),  # rate -21%, force -1.5%
+        row(1.0, 0.0275 * 0.9, zone=-0.924),  # force (0.81 - 0.076) / 1.924 = +38%
+        row(2.0, 0.0275 * 0.1, zone=-1.05),  # no flow by sqrt(1 + G); force +2.9%
     ]
     data = {"rows": rows}
     derive_gas_lab(data)
     assert rows[1]["eq17_ratio"] == pytest.approx(3.0, rel=1e-12)
     assert rows[1]["eq17_rel_error"] == pytest.approx(0.05, rel=1e-9)
+    assert rows[1]["eq17_force_error"] == pytest.approx((3.15**2 - 9) / 9, rel=1e-9)
     assert rows[1]["eq23_ratio"] > 1  # the Table I law, computed
     assert rows[3]["sim_ratio"] is None  # no Q/Q0 from an oscillating rate
+    assert rows[4]["eq17_rel_error"] == pytest.approx(0.218 / 0.076**0.5 - 1, rel=1e-9)
+    assert rows[4]["eq17_force_error"] == pytest.approx((0.218**2 - 0.076) / 1.924, rel=1e-9)
+    assert rows[6]["eq17_ratio"] is None
     by_name = {c.name: c for c in checks({"gas-lab": data})}
-    assert by_name["12.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
-    assert not by_name["25.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
-    assert not by_name["4.0: Q/Q0 over eq. 17's with the zone's gradient - 1"].passed
+
+    def eq17(label):
+        return by_name[f"{label}: eq. 17's force balance, ((Q/Q0)^2 - 1 - G) / (1 + |G|)"]
+
+    assert eq17("12.0").passed
+    assert not eq17("25.0").passed  # a third below: (4 - 9) / 9
+    assert not eq17("4.0").passed  # no steady rate, no figure
+    assert eq17("0.0").passed
+    assert not eq17("1.0").passed
+    assert eq17("2.0").passed
     assert by_name["None: steady at its defaults"].passed
     assert not by_name["4.0: steady at its defaults"].passed
 
