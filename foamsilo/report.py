@@ -88,6 +88,8 @@ def _uncertainty_line(s: dict[str, Any], units: str) -> str:
         cells = " / ".join(str(n) for n in grid["cells"])
         values = " / ".join(f"{v:.5g}" for v in grid["values"])
         order = f"observed order {c['order']:.2f}, " if c.get("order") is not None else ""
+        if c.get("order_used") is not None and c["order_used"] < c["order"]:
+            order += f"taken as the scheme's {c['order_used']:g}, "
         ext = (f"extrapolated {c['extrapolated']:.5g} {units}, "
                if c.get("extrapolated") is not None else "")  # fmt: skip
         return (

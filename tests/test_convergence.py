@@ -65,3 +65,28 @@ def test_converged_series():
 def test_bad_series_refused(cells, values, match):
     with pytest.raises(FoamsiloError, match=match):
         grid_convergence(cells, values)
+
+
+def test_an_order_above_the_formal_one_is_not_trusted():
+    # three grids falling as n^-3 (faster than the second-order scheme can):
+    # the observed order is reported, the extrapolation and the GCI take 2
+    cells = [28, 40, 56]
+    values = series(cells, 3.0)
+    g = grid_convergence(cells, values)
+    assert g.order == pytest.approx(3.0, rel=1e-9)
+    assert g.order_used == 2.0
+    r2 = (56 / 40) ** 2
+    assert g.extrapolated == pytest.approx((r2 * values[2] - values[1]) / (r2 - 1), rel=1e-12)
+    assert g.gci == pytest.approx(1.25 * abs(values[1] / values[2] - 1) / (r2 - 1), rel=1e-12)
+    # wider than the n^-3 model's own index, and beyond the true value
+    true_gci = 1.25 * abs(values[2] - 0.034) / abs(values[2])
+    assert g.gci > 1.5 * true_gci
+    assert g.extrapolated > 0.034 > values[2]  # the lower order extrapolates further
+    assert g.cells_for(0.01) == pytest.approx(
+        56 * (abs(g.error_vs_extrapolated[-1]) / 0.01) ** 0.5, rel=1e-12
+    )
+    # an order below the formal one is taken as observed
+    lower = grid_convergence(cells, series(cells, 1.2))
+    assert lower.order_used == pytest.approx(lower.order, rel=1e-12)
+    with pytest.raises(FoamsiloError, match="formal_order"):
+        grid_convergence(cells, values, formal_order=0.0)

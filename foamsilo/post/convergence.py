@@ -12,6 +12,14 @@ possibly unequal refinement ratios,
 * the fine-grid index ``GCI = 1.25 |phi1 - phi2| / |phi1| / (r21^p - 1)``
   (1.25: Roache's safety factor for a three-grid study).
 
+An observed order above the scheme's formal order is not trusted: three grids
+that happen to fall faster than the scheme can converge would put the
+extrapolation next to the finest value and shrink the GCI. The extrapolation,
+the GCI and the resolution for a level then take the formal order,
+``p = min(p_observed, p_formal)`` (Roache 1998, *Verification and Validation
+in Computational Science and Engineering*, sec. 5.9; the observed order is
+still reported).
+
 Oscillatory convergence (e32 / e21 < 0) has no order; its uncertainty is half
 the range of the three values (Stern et al. 2001, J. Fluids Eng. 123, 793).
 A grid is described by its number of cells across (h ~ 1 / n).
@@ -27,6 +35,9 @@ from foamsilo.errors import FoamsiloError
 
 #: Roache's safety factor for a study of three or more grids
 SAFETY_FACTOR = 1.25
+#: The scheme's formal order in space (Gauss linear: second order; the code
+#: verification measures it, docs/validation/verification.md)
+FORMAL_ORDER = 2.0
 #: Fixed-point iterations for the order (it converges in a handful for r near 2)
 _ITERATIONS = 200
 
@@ -47,7 +58,7 @@ class GridConvergence:
     order : float or None
         Observed order p (monotone only).
     extrapolated : float or None
-        Richardson-extrapolated value (monotone only).
+        Richardson-extrapolated value (monotone only), with ``order_used``.
     gci : float or None
         Relative uncertainty of the finest value: the fine-grid GCI
         (monotone), half the relative range of the three finest (oscillatory).
@@ -56,6 +67,9 @@ class GridConvergence:
     orders_by_triple : list of float or None
         The order from each run of three consecutive grids: a series in its
         asymptotic range gives about the same p throughout.
+    order_used : float or None
+        The order the extrapolation, the GCI and :meth:`cells_for` take: the
+        observed one, at most the formal order (monotone only).
     """
 
     cells: list[int]
@@ -66,6 +80,7 @@ class GridConvergence:
     gci: float | None
     error_vs_extrapolated: list[float] | None
     orders_by_triple: list[float | None]
+    order_used: float | None = None
 
     def cells_for(self, level: float) -> float | None:
         """Cells across at which the error against the extrapolation falls to ``level``.
@@ -74,12 +89,13 @@ class GridConvergence:
         finest grid; a value above the finest grid is a projection. None
         without an order.
         """
-        if self.order is None or self.error_vs_extrapolated is None or self.order <= 0:
+        p = self.order_used
+        if p is None or self.error_vs_extrapolated is None or p <= 0:
             return None
         e1 = abs(self.error_vs_extrapolated[-1])
         if e1 == 0.0:
             return float(self.cells[-1])
-        return self.cells[-1] * (e1 / level) ** (1.0 / self.order)
+        return self.cells[-1] * (e1 / level) ** (1.0 / p)
 
     def coarsest_within(self, level: float) -> int | None:
         """Coarsest measured grid from which this and every finer one are within ``level``."""
@@ -123,7 +139,9 @@ def _order(r21: float, r32: float, e21: float, e32: float) -> float | None:
     return p
 
 
-def grid_convergence(cells: list[int], values: list[float]) -> GridConvergence:
+def grid_convergence(
+    cells: list[int], values: list[float], formal_order: float = FORMAL_ORDER
+) -> GridConvergence:
     """Return the grid convergence of ``values`` over grids of ``cells`` across.
 
     Parameters
@@ -132,6 +150,9 @@ def grid_convergence(cells: list[int], values: list[float]) -> GridConvergence:
         Cells across each grid, strictly increasing (at least three).
     values : list of float
         The scalar on each grid, finite and nonzero.
+    formal_order : float
+        The scheme's order: an observed order above it is replaced by it in
+        the extrapolation and the GCI.
 
     Raises
     ------
@@ -144,6 +165,8 @@ def grid_convergence(cells: list[int], values: list[float]) -> GridConvergence:
             f"grid convergence needs three or more grids with a value each; "
             f"got {len(cells)} grids and {len(values)} values"
         )
+    if not formal_order > 0:
+        raise FoamsiloError(f"grid convergence: formal_order {formal_order}; allowed: > 0")
     if any(b <= a for a, b in zip(cells, cells[1:], strict=False)):
         raise FoamsiloError(f"grid convergence: cells across must increase; got {cells}")
     bad = [n for n, v in zip(cells, values, strict=True) if not math.isfinite(v) or v == 0]
@@ -167,8 +190,11 @@ def grid_convergence(cells: list[int], values: list[float]) -> GridConvergence:
         half_range = (max(values[-3:]) - min(values[-3:])) / 2 / abs(f1)
         return GridConvergence(list(cells), list(values), "oscillatory", None, None,
                                half_range, None, triples)  # fmt: skip
-    rp = (n1 / n2) ** p
+    used = min(p, formal_order)
+    rp = (n1 / n2) ** used
     ext = (rp * f1 - f2) / (rp - 1)
     gci = SAFETY_FACTOR * abs(e21 / f1) / (rp - 1)
     errors = [v / ext - 1 for v in values]
-    return GridConvergence(list(cells), list(values), "monotone", p, ext, gci, errors, triples)
+    return GridConvergence(
+        list(cells), list(values), "monotone", p, ext, gci, errors, triples, used
+    )

@@ -798,9 +798,16 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
     if conv["kind"] != "monotone":
         return f"{head}; uncertainty of the finest {fmt(conv['gci'], '.1%')} (half the range)."
     by_triple = ", ".join(fmt(p, ".2f") for p in conv["orders_by_triple"])
+    used = conv.get("order_used")
+    capped = (
+        f", above the scheme's formal order, so the extrapolation and the GCI take p = {used:g}"
+        if used is not None and used < conv["order"]
+        else ""
+    )
     parts = [
-        f"{head}, observed order p = {conv['order']:.2f} (each run of three grids: {by_triple}), "
-        f"extrapolated Q = {conv['extrapolated']:.5g}, GCI of the finest {conv['gci']:.1%}."
+        f"{head}, observed order p = {conv['order']:.2f} (each run of three grids: {by_triple})"
+        f"{capped}, extrapolated Q = {conv['extrapolated']:.5g}, GCI of the finest "
+        f"{conv['gci']:.1%}."
     ]
     for key, level in (("2pct", "2%"), ("1pct", "1%")):
         n, measured = conv[f"cells_for_{key}"], conv[f"coarsest_within_{key}"]
