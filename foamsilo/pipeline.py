@@ -58,13 +58,23 @@ from foamsilo.errors import (
 )
 from foamsilo.foam import reconstruct_par
 from foamsilo.jsonio import dumps, jsonable
+from foamsilo.mesh import ogrid_for
+from foamsilo.mesh.layout import MIN_QUADRANT_CELLS
 from foamsilo.post import reduce_case
 from foamsilo.post.grid import GRID_RATIO, coarser_cells, companion_overrides, write_grid_file
 from foamsilo.post.steady import START
 from foamsilo.process import tied_to_parent
 from foamsilo.report import case_report
 from foamsilo.run import ProgressCallback, RunResult, StepRelease, outer_iterations, run_solver
-from foamsilo.scene import Scene, is_scene_file, load_scene, load_scene_file, scene_digest
+from foamsilo.scene import (
+    CELLS_ACROSS_MAX,
+    Scene,
+    format_override,
+    is_scene_file,
+    load_scene,
+    load_scene_file,
+    scene_digest,
+)
 from foamsilo.solver import ensure_solver
 from foamsilo.summary import RunSummary, write_summary
 from foamsilo.toolchain import OpenFOAM, find_openfoam
@@ -782,6 +792,58 @@ def run_many(
 # ----------------------------------------------------------------------------- grid study
 
 
+def _o_grid_floored(scene: Scene) -> bool:
+    """Whether the scene's 3D O-grid holds a count at its floor (finer than its cells say)."""
+    s = scene.silo
+    if scene.representation != "3d" or s.shape == "rectangular" or s.eccentricity > 0:
+        return False
+    return ogrid_for(scene).floored
+
+
+def _check_grid_family(source: str, overrides: list[str], scene: Scene, ratio: float) -> None:
+    """Refuse a grid study whose three grids are not one refinement family.
+
+    A 3D O-grid whose counts sit at their floors on a coarse grid is finer
+    there than its cells across say: its rate is closer to the fine grid's
+    than the family's would be, the observed order comes out high and the
+    GCI too small. Checked before anything is run.
+
+    Raises
+    ------
+    InputError
+        One of the three grids holds its O-grid at a floor; the message
+        gives the fewest cells across from which the study is one family.
+    """
+
+    def floored_at(n: int) -> list[int]:
+        fine = (
+            scene
+            if n == scene.cells_across
+            else load_scene(source, [*overrides, format_override("mesh.cells_across", n)])
+        )
+        grids = [
+            (m, load_scene(source, [*overrides, *companion_overrides(fine, m)]))
+            for m in coarser_cells(n, ratio)
+        ]
+        return [m for m, sc in [*grids, (n, fine)] if _o_grid_floored(sc)]
+
+    bad = floored_at(scene.cells_across)
+    if not bad:
+        return
+    upper = CELLS_ACROSS_MAX
+    least = next((n for n in range(scene.cells_across + 1, upper + 1) if not floored_at(n)), None)
+    allowed = f">= {least}" if least else f"none up to {upper}"
+    raise InputError(
+        f"mesh.cells_across = {scene.cells_across}: a grid study's grids at "
+        f"{', '.join(map(str, bad))} across hold counts of the 3D O-grid at their floors "
+        f"({MIN_QUADRANT_CELLS} cells on a quarter circle, {MIN_QUADRANT_CELLS // 2} beside "
+        "a lateral orifice, 2 radially), finer there than "
+        f"their cells across say, so the three are not one refinement family and their "
+        f"GCI would be too small; allowed for this scene: {allowed} "
+        "(docs/post.md, 'The uncertainty of Q')"
+    )
+
+
 def grid_study(
     spec: CaseSpec,
     *,
@@ -819,6 +881,7 @@ def grid_study(
         source = spec.scene
         scene = load_scene(spec.scene, list(spec.overrides))
     cells = coarser_cells(scene.cells_across, ratio)
+    _check_grid_family(source, list(spec.overrides), scene, ratio)
     home = case_dir.parent / f"{case_dir.name}.grid"
     companions = [
         CaseSpec(

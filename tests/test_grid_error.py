@@ -116,3 +116,43 @@ def test_a_graded_mesh_is_coarsened_as_a_whole():
     assert g == pytest.approx(1.1**2.25, rel=1e-12)
     coarse = load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.3", "mesh.cells_across=72"])
     assert companion_overrides(coarse, 32)[2] == "mesh.growth_rate=1.5"  # within its range
+
+
+def test_a_3d_o_grid_at_its_floor_is_no_refinement_family(tmp_path):
+    """A 3D grid study whose coarse grids keep the O-grid's floors is refused before it runs."""
+    from foamsilo.errors import InputError
+    from foamsilo.mesh import ogrid_for
+    from foamsilo.mesh.layout import MIN_QUADRANT_CELLS
+    from foamsilo.pipeline import CaseSpec, grid_study
+    from foamsilo.scene import load_preset
+
+    def arcs(n):
+        og = ogrid_for(load_preset("venier-test1", ["mesh.representation='3d'",
+                                                   f"mesh.cells_across={n}"]))  # fmt: skip
+        return og.arcs[0][0][2], og.floored
+
+    # Venier Test 1: 12 cells on a quarter circle from 20 to 56 across (the
+    # floor), then the count follows the cell size
+    assert arcs(20) == (MIN_QUADRANT_CELLS, True)
+    assert arcs(56) == (MIN_QUADRANT_CELLS, True)
+    n80, floored80 = arcs(80)
+    assert n80 > MIN_QUADRANT_CELLS and not floored80
+    case = tmp_path / "v3d"
+    spec = CaseSpec(case, "venier-test1", ("mesh.representation='3d'", "mesh.cells_across=72"))
+    with pytest.raises(InputError, match=r"mesh.cells_across = 72: .*32, 48 across.* >= \d+"):
+        grid_study(spec)
+    assert not case.exists() and not (tmp_path / "v3d.grid").exists()  # nothing written
+    # the least allowed: its three grids clear of the floors, one fewer not
+    least = int(str(_refusal(spec)).split(">= ")[1].split(" ")[0])
+    for n in coarser_cells(least) + [least]:
+        assert not arcs(n)[1]
+    assert any(arcs(n)[1] for n in coarser_cells(least - 1))
+
+
+def _refusal(spec):
+    from foamsilo.errors import InputError
+    from foamsilo.pipeline import grid_study
+
+    with pytest.raises(InputError) as info:
+        grid_study(spec)
+    return info.value

@@ -476,7 +476,11 @@ class OGrid:
     -z. ``arcs`` gives, per quadrant, the angular segments (start, end, cells)
     between the quadrant's corners. ``orifice_rings`` rings from the centre
     (and the square) make the bottom orifice; ``lateral_arc`` is the angular
-    segment of the wall that is a lateral orifice (or None).
+    segment of the wall that is a lateral orifice (or None). ``floored``: a
+    count was raised to its floor (``MIN_QUADRANT_CELLS`` on a quarter
+    circle, two radial cells) above what the cell size asks for, so the
+    cross-section is finer than the scene's cells across say; such a grid is
+    not one refinement family with finer ones.
     """
 
     rings: tuple[float, ...]
@@ -485,6 +489,7 @@ class OGrid:
     orifice_rings: int = 0
     lateral_arc: tuple[float, float] | None = None
     square: float = 0.6
+    floored: bool = False
 
     @property
     def n_cells(self) -> int:
@@ -506,25 +511,32 @@ def ogrid_for(scene: Scene) -> OGrid:
         arc = s.lateral_arc_length
         assert arc is not None
         tw = arc / (2 * R)
-        n_orf = max(2, round(arc / h))
-        n_side = max(MIN_QUADRANT_CELLS // 2, round((q - tw) * R / (2 * h)))
-        n_b = max(MIN_QUADRANT_CELLS, round(2 * q * R / (2 * h)))
+        raw = (
+            round(arc / h),
+            round((q - tw) * R / (2 * h)),
+            round(2 * q * R / (2 * h)),
+            round((1 - 0.6) * R / h),
+        )
+        floors = (2, MIN_QUADRANT_CELLS // 2, MIN_QUADRANT_CELLS, 2)
+        n_orf, n_side, n_b, n_r = (max(f, n) for f, n in zip(floors, raw, strict=True))
         quad0 = ((-q, -tw, n_side), (-tw, tw, n_orf), (tw, q, n_side))
         n_a = 2 * n_side + n_orf
-        n_r = max(2, round((1 - 0.6) * R / h))
         return OGrid(
             (R,),
             ((n_r, 1.0),),
             (quad0, ((q, 3 * q, n_b),), ((3 * q, 5 * q, n_a),), ((5 * q, 7 * q, n_b),)),
             lateral_arc=(-tw, tw),
+            floored=any(n < f for f, n in zip(floors, raw, strict=True)),
         )
     r_o = s.orifice_width / 2
-    n_q = max(MIN_QUADRANT_CELLS, round(q * 2 * r_o / h), math.ceil(2 * q * R / coarse))
+    n_size = max(round(q * 2 * r_o / h), math.ceil(2 * q * R / coarse))
+    n_q = max(MIN_QUADRANT_CELLS, n_size)
+    floored = n_size < MIN_QUADRANT_CELLS
     arcs = tuple(((q * (2 * k - 1), q * (2 * k + 1), n_q),) for k in range(4))
     if s.shape == "hopper":  # the whole bottom is the outlet; radii scale down to it
         size = 2 * q * r_o / n_q  # arc cell at the outlet
         n_r = max(2, round((1 - 0.6) * r_o / size))
-        return OGrid((R,), ((n_r, 1.0),), arcs, orifice_rings=1)
+        return OGrid((R,), ((n_r, 1.0),), arcs, orifice_rings=1, floored=floored)
     # flat bottom, centred orifice: a ring ends on the orifice edge, then the
     # cells grow towards the wall up to the arc spacing there
     size = 2 * q * r_o / n_q
@@ -534,7 +546,7 @@ def ogrid_for(scene: Scene) -> OGrid:
     k = scene.mesh.orifice_edge_refinement
     if k <= 1.0 + 1e-12:
         n_r2, g2 = _growth(R - r_o, first, last)
-        return OGrid((r_o, R), ((n_r1, 1.0), (n_r2, g2)), arcs, orifice_rings=1)
+        return OGrid((r_o, R), ((n_r1, 1.0), (n_r2, g2)), arcs, orifice_rings=1, floored=floored)
     # the orifice's edge refined: radial cells narrow to first / k on both
     # sides of it (as a profile's columns, edge_bands), then grow to the wall
     growth = scene.mesh.growth_rate
@@ -554,7 +566,7 @@ def ogrid_for(scene: Scene) -> OGrid:
         radii.append(radii[-1] + span)
         cells.append((n, ratio))
     radii[-1] = R
-    return OGrid(tuple(radii), tuple(cells), arcs, orifice_rings=len(inward))
+    return OGrid(tuple(radii), tuple(cells), arcs, orifice_rings=len(inward), floored=floored)
 
 
 def cells_estimate(scene: Scene) -> int:

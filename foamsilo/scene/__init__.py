@@ -36,6 +36,7 @@ from foamsilo.scene.io import (
     to_toml,
 )
 from foamsilo.scene.model import (
+    CELLS_ACROSS_MAX,
     GRAVITY,
     WEDGE_ANGLE_DEG,
     Air,
@@ -51,6 +52,7 @@ from foamsilo.scene.model import (
 from foamsilo.scene.reference import reference_markdown
 
 __all__ = [
+    "CELLS_ACROSS_MAX",
     "GRAVITY",
     "WEDGE_ANGLE_DEG",
     "Air",

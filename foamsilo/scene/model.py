@@ -330,6 +330,10 @@ class Gas:
     )
 
 
+#: Most cells across the silo width a scene may ask for
+CELLS_ACROSS_MAX = 2048
+
+
 @dataclass(frozen=True)
 class Mesh:
     """Mesh resolution and representation."""
@@ -337,7 +341,7 @@ class Mesh:
     cells_across: int | None = _f(
         "cells across the silo width L (the paper uses 64); give this or cells_across_orifice",
         ge=4,
-        le=2048,
+        le=CELLS_ACROSS_MAX,
         default=None,
     )
     cells_across_orifice: int | None = _f(
