@@ -58,7 +58,7 @@ from foamsilo.errors import (
 )
 from foamsilo.foam import reconstruct_par
 from foamsilo.jsonio import dumps, jsonable
-from foamsilo.mesh import ogrid_for
+from foamsilo.mesh import o_grid_floored
 from foamsilo.mesh.layout import MIN_QUADRANT_CELLS
 from foamsilo.post import reduce_case
 from foamsilo.post.grid import GRID_RATIO, coarser_cells, companion_overrides, write_grid_file
@@ -792,14 +792,6 @@ def run_many(
 # ----------------------------------------------------------------------------- grid study
 
 
-def _o_grid_floored(scene: Scene) -> bool:
-    """Whether the scene's 3D O-grid holds a count at its floor (finer than its cells say)."""
-    s = scene.silo
-    if scene.representation != "3d" or s.shape == "rectangular" or s.eccentricity > 0:
-        return False
-    return ogrid_for(scene).floored
-
-
 def _check_grid_family(source: str, overrides: list[str], scene: Scene, ratio: float) -> None:
     """Refuse a grid study whose three grids are not one refinement family.
 
@@ -825,7 +817,7 @@ def _check_grid_family(source: str, overrides: list[str], scene: Scene, ratio: f
             (m, load_scene(source, [*overrides, *companion_overrides(fine, m)]))
             for m in coarser_cells(n, ratio)
         ]
-        return [m for m, sc in [*grids, (n, fine)] if _o_grid_floored(sc)]
+        return [m for m, sc in [*grids, (n, fine)] if o_grid_floored(sc)]
 
     bad = floored_at(scene.cells_across)
     if not bad:

@@ -412,3 +412,27 @@ def test_a_row_counts_the_runner_s_recoveries_and_the_solver_s_retakes(tmp_path)
         ' {"time": 0.4, "growth": 9.0}]}'
     )
     assert record_fields(tmp_path) == {"recoveries": 1, "step_retakes": 2, "share_retakes": 3}
+
+
+def test_a_3d_series_leaves_its_o_grid_floor_rows_out_of_the_convergence():
+    from foamsilo.studies.suite import derive_work_precision
+
+    def row(n):
+        sets = ["mesh.representation='3d'", f"mesh.cells_across={n}"]
+        return {"label": f"{n} across", "preset": "venier-test1", "sets": sets,
+                "cells_across": n, "Q": 5.0 * (1 - 1.0 / n), "outcome": "steady"}  # fmt: skip
+
+    rows = [row(n) for n in (40, 56, 80, 112, 160)]
+    data = {"rows": rows, "Q_law": None}
+    derive_work_precision(data)
+    # 12 cells on a quarter circle up to 56 across (the floor), not after
+    assert [r["o_grid_floored"] for r in rows] == [True, True, False, False, False]
+    conv = data["convergence"]
+    assert conv["cells"] == [80, 112, 160]
+    assert conv["order"] == pytest.approx(1.0, rel=1e-9)
+    assert conv["extrapolated"] == pytest.approx(5.0, rel=1e-9)
+    assert rows[0]["err_vs_extrapolated"] is None
+    # two family rows only: no estimate, said so
+    data = {"rows": [row(n) for n in (40, 56, 80, 112)], "Q_law": None}
+    derive_work_precision(data)
+    assert data["convergence"] is None

@@ -569,6 +569,18 @@ def ogrid_for(scene: Scene) -> OGrid:
     return OGrid(tuple(radii), tuple(cells), arcs, orifice_rings=len(inward), floored=floored)
 
 
+def o_grid_floored(scene: Scene) -> bool:
+    """Whether the scene's 3D O-grid holds a count at its floor (finer than its cells say).
+
+    Such a grid is no refinement family with finer ones: a grid study or a
+    convergence series leaves it out. False for any other mesh.
+    """
+    s = scene.silo
+    if scene.representation != "3d" or s.shape == "rectangular" or s.eccentricity > 0:
+        return False
+    return ogrid_for(scene).floored
+
+
 def cells_estimate(scene: Scene) -> int:
     """Return the number of cells the scene's mesh will have (structured meshes exactly)."""
     s = scene.silo

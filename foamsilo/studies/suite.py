@@ -157,6 +157,16 @@ def work_precision(
     return out
 
 
+def _floored_row(row: Row) -> bool:
+    """Whether a row's scene holds its 3D O-grid at a floor (rebuilt from its preset and sets)."""
+    from foamsilo.mesh import o_grid_floored
+    from foamsilo.scene import load_preset
+
+    if not row.get("preset"):
+        return False
+    return o_grid_floored(load_preset(row["preset"], list(row.get("sets") or [])))
+
+
 def derive_work_precision(data: dict[str, Any]) -> None:
     """Add the figures a work-precision series derives from its rows.
 
@@ -180,7 +190,13 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     errs = [r["err_vs_finest"] if r["err_vs_finest"] is not None else math.inf for r in rows]
     data["recommend_5pct"] = _recommend(cells, errs, 0.05)
     data["recommend_2pct"] = _recommend(cells, errs, 0.02)
-    steady = [r for r in rows if r.get("Q") and r.get("outcome") == "steady"]
+    for r in rows:
+        r["o_grid_floored"] = _floored_row(r)
+    # a 3D O-grid held at its floors is finer than its cells across say: no
+    # refinement family with the finer rows (foamsilo.mesh.o_grid_floored)
+    steady = [
+        r for r in rows if r.get("Q") and r.get("outcome") == "steady" and not r["o_grid_floored"]
+    ]
     data["convergence"] = None
     if len(steady) < 3:
         return
@@ -792,7 +808,10 @@ def plot_time_steps(result: dict[str, Any], path: Path) -> None:
 def _convergence_words(conv: dict[str, Any] | None) -> str:
     """Return one paragraph on the grid convergence of a work-precision series."""
     if not conv:
-        return "Grid convergence: fewer than three steady resolutions, no estimate."
+        return (
+            "Grid convergence: fewer than three steady resolutions of one refinement family "
+            "(rows whose 3D O-grid sits at its floors are left out), no estimate."
+        )
     grids = ", ".join(map(str, conv["cells"][-3:]))
     head = f"Grid convergence of Q (the three finest steady grids, {grids} across): {conv['kind']}"
     if conv["kind"] != "monotone":
@@ -902,8 +921,9 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 q, qe = r.get("Q"), r.get("Q_time_error")
                 # a rate that is not steady is no grid figure: said beside it
                 shown = fmt(q, ".5g") + (f" ({r['outcome']})" if r["outcome"] != "steady" else "")
+                floor = " (O-grid at its floors)" if r.get("o_grid_floored") else ""
                 lines.append(
-                    f"| {r['cells_across']} | {fmt(r.get('cells'), 'd')} "
+                    f"| {r['cells_across']}{floor} | {fmt(r.get('cells'), 'd')} "
                     f"| {shown} | {fmt(r.get('Q_dimensionless'), '.4f')} "
                     f"| {fmt(r.get('err_vs_finest'), '.1%')} "
                     f"| {fmt(r.get('err_vs_extrapolated'), '+.1%')} "
