@@ -1,0 +1,354 @@
+"""Issue 18's cost targets and the presets' default grids, judged on the suite's rows.
+
+The validation suite (:mod:`foamsilo.studies.suite`) measures the steady Q of
+each work-precision series at several grids, with its cost, and every preset at
+its defaults. This module reads those results: for each target of
+``suite.toml`` ``[[targets]]`` the figure it asks for (CPU-s per simulated
+second, wall time, cost per cell and step), a verdict, and, for a target
+missed, what stands in the way (the grid it would need and what that costs);
+and for each preset of ``[default-resolution]`` the error of its default grid
+against its series' extrapolated Q. Nothing here runs a case: the figures are
+recomputed from ``suite.json`` whenever the report is written.
+
+Verdicts: ``met`` (measured within the limit), ``missed`` (measured or
+projected beyond it), ``not shown`` (no measured grid reaches the level and no
+projection says it misses, or the series did not run).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from foamsilo.post.convergence import FORMAL_ORDER, GridConvergence, coarsest_within
+
+Row = dict[str, Any]
+
+#: A target's unit, by kind
+UNITS = {
+    "cost": "CPU-s per simulated s",
+    "wall": "s wall",
+    "cell-step": "x",
+    "preset": "s wall",
+}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One target's figure against its limit.
+
+    Attributes
+    ----------
+    name, what, kind, why : str
+        The target as ``suite.toml`` gives it.
+    limit : float
+        The largest figure that meets it, in ``unit``.
+    unit : str
+        The figure's unit (:data:`UNITS`).
+    value : float or None
+        The figure, measured or projected (``detail`` says which); None where
+        nothing measures it.
+    verdict : str
+        ``met``, ``missed`` or ``not shown``.
+    detail : str
+        Where the figure comes from and, for a missed target, what stands in
+        the way.
+    """
+
+    name: str
+    what: str
+    kind: str
+    why: str
+    limit: float
+    unit: str
+    value: float | None
+    verdict: str
+    detail: str
+
+
+def cost_fit(rows: list[Row]) -> tuple[float, float] | None:
+    """Fit CPU-s per simulated second as ``c0 n^k`` over a series' rows.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Work-precision rows with ``cells_across``, ``cpu_s`` and
+        ``simulated_time_s``.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(k, ln c0)``; None with fewer than two rows that have a cost.
+    """
+    pts = [(r["cells_across"], r["cpu_s"] / r["simulated_time_s"]) for r in rows
+           if r.get("cpu_s") and r.get("simulated_time_s")]  # fmt: skip
+    if len(pts) < 2:
+        return None
+    k, lnc0 = np.polyfit(np.log([n for n, _ in pts]), np.log([c for _, c in pts]), 1)
+    return float(k), float(lnc0)
+
+
+def _cost(row: Row) -> float | None:
+    return row["cpu_s"] / row["simulated_time_s"] if row.get("cpu_s") and row.get(
+        "simulated_time_s") else None  # fmt: skip
+
+
+def _grid(conv: dict[str, Any] | None) -> GridConvergence | None:
+    """Return the series' grid convergence rebuilt from its report dict (monotone only)."""
+    if not conv or conv.get("kind") != "monotone" or conv.get("extrapolated") is None:
+        return None
+    kwargs: dict[str, Any] = {f.name: conv.get(f.name) for f in fields(GridConvergence)}
+    return GridConvergence(**kwargs)
+
+
+def _family(data: dict[str, Any]) -> list[Row]:
+    """Return the rows a series' convergence is judged on: steady, off an O-grid floor."""
+    return [r for r in data["rows"] if r.get("Q") and r.get("outcome") == "steady"
+            and not r.get("o_grid_floored")]  # fmt: skip
+
+
+def _order_words(g: GridConvergence) -> str:
+    return (
+        f"observed order {g.order:.2f}, extrapolated Q {g.extrapolated:.5g}, "
+        f"GCI of the finest {g.gci:.1%}"
+    )
+
+
+@dataclass(frozen=True)
+class _Resolution:
+    """Where one series reaches a level: the grid, its cost, measured or projected."""
+
+    series: str
+    cells: float
+    cost: float | None
+    measured: bool
+
+    def words(self) -> str:
+        how = "measured" if self.measured else "projected by the error model"
+        cost = f", {self.cost:.3g} CPU-s per simulated s" if self.cost is not None else ""
+        return f"{self.series}: {self.cells:.0f} across ({how}){cost}"
+
+
+def _resolution(name: str, data: dict[str, Any], level: float) -> _Resolution | None:
+    """Return a series' coarsest grid within ``level`` of its extrapolation, with its cost."""
+    g = _grid(data.get("convergence"))
+    if g is None or g.error_vs_extrapolated is None:
+        return None
+    family = _family(data)
+    n = g.coarsest_within(level)
+    if n is not None:
+        row = next(r for r in family if r["cells_across"] == n)
+        return _Resolution(name, float(n), _cost(row), True)
+    model = g.cells_for(level)
+    if model is None:
+        return None
+    fit = cost_fit(family)
+    cost = math.exp(fit[1]) * model ** fit[0] if fit else None
+    return _Resolution(name, model, cost, False)
+
+
+def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str, str]:
+    level = float(t["level"])
+    found = [r for s in t["series"] if s in wp
+             if (r := _resolution(s, wp[s], level)) is not None]  # fmt: skip
+    missing = [s for s in t["series"] if s not in wp]
+    if not found:
+        return None, "not shown", "no series with a grid convergence estimate" + (
+            f" ({', '.join(missing)} not run)" if missing else "")  # fmt: skip
+    priced = [r for r in found if r.cost is not None]
+    best = min(priced, key=lambda r: r.cost or math.inf) if priced else found[0]
+    others = "; ".join(r.words() for r in found if r is not best)
+    g = _grid(wp[best.series]["convergence"])
+    assert g is not None  # _resolution found it
+    detail = f"cheapest: {best.words()}; {_order_words(g)}" + (
+        f". The others: {others}" if others else "")  # fmt: skip
+    if best.cost is None:
+        return None, "not shown", detail
+    if best.cost <= float(t["limit"]):
+        verdict = "met" if best.measured else "not shown"
+    else:
+        verdict = "missed"
+        detail += (
+            f". In the way: Q converges at order {g.order:.2f}, under the scheme's "
+            f"{FORMAL_ORDER:g}, so the {level:.0%} grid is {best.cells:.0f} across and costs "
+            f"{best.cost / float(t['limit']):.2g} times the target"
+        )
+    return best.cost, verdict, detail
+
+
+def _extrapolated(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str]:
+    """Return the extrapolated Q a ``wall`` target's rows are judged on, and whose it is."""
+    for name in [t["series"][0], *t.get("reference", [])]:
+        g = _grid((wp.get(name) or {}).get("convergence"))
+        if g is not None:
+            return g.extrapolated, f"{name}'s extrapolation ({_order_words(g)})"
+    return None, ""
+
+
+def _wall_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str, str]:
+    name, level = t["series"][0], float(t["level"])
+    if name not in wp:
+        return None, "not shown", f"{name} not run"
+    q_ext, whose = _extrapolated(t, wp)
+    family = _family(wp[name])
+    if q_ext is None or not family:
+        return None, "not shown", f"no extrapolated Q for {name}"
+    errs = [r["Q"] / q_ext - 1 for r in family]
+    table = ", ".join(f"{r['cells_across']} across {e:+.1%} ({r['wall_s'] / 60:.1f} min)"
+                      for r, e in zip(family, errs, strict=True))  # fmt: skip
+    n = coarsest_within([r["cells_across"] for r in family], errs, level)
+    detail = f"against {whose}: {table}"
+    if n is None:
+        return None, "not shown", f"no grid within {level:.0%}; {detail}"
+    wall = next(r["wall_s"] for r in family if r["cells_across"] == n)
+    verdict = "met" if wall <= float(t["limit"]) else "missed"
+    return wall, verdict, f"{n} across; {detail}"
+
+
+def _row(wp: dict[str, Any], name: str, cells: int) -> Row | None:
+    data = wp.get(name)
+    rows = [r for r in (data or {}).get("rows", []) if r["cells_across"] == cells]
+    return rows[0] if rows else None
+
+
+def _cell_step_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str, str]:
+    per: list[float] = []
+    words = []
+    for name, cells in (t["a"], t["b"]):
+        r = _row(wp, name, int(cells))
+        if r is None or not (r.get("cpu_s") and r.get("cells") and r.get("steps")):
+            return None, "not shown", f"{name} at {cells} across not run"
+        per.append(r["cpu_s"] / (r["cells"] * r["steps"]))
+        words.append(f"{name} at {cells} across {per[-1] * 1e6:.2f} us per cell-step")
+    ratio = per[0] / per[1]
+    return ratio, "met" if ratio <= float(t["limit"]) else "missed", "; ".join(words)
+
+
+def _preset_error(data: dict[str, Any], cells: int) -> tuple[float | None, str]:
+    """Return a grid's error against its series' converged Q, and how it was found."""
+    conv = data.get("convergence") or {}
+    g = _grid(conv)
+    row = next((r for r in data["rows"] if r["cells_across"] == cells), None)
+    if g is not None and g.error_vs_extrapolated is not None and g.order_used:
+        if row is not None and row.get("err_vs_extrapolated") is not None:
+            return row["err_vs_extrapolated"], "measured, against the extrapolated Q"
+        e1 = g.error_vs_extrapolated[-1]
+        e = e1 * (g.cells[-1] / cells) ** g.order_used
+        return e, "by the error model, against the extrapolated Q"
+    if conv.get("kind") in ("oscillatory", "converged") and row is not None:
+        unc = conv.get("gci")
+        return row.get("err_vs_finest"), (
+            f"against the finest grid ({conv['kind']}; its uncertainty {unc:.1%})"
+            if unc is not None else "against the finest grid")  # fmt: skip
+    return None, "no grid convergence estimate"
+
+
+def _needed(name: str, data: dict[str, Any], level: float) -> str:
+    res = _resolution(name, data, level)
+    if res is not None:
+        return f"{level:.0%} needs {res.words()}"
+    conv = data.get("convergence") or {}
+    if conv.get("kind") in ("oscillatory", "converged"):
+        # no order to extrapolate with: the coarsest grid within the level of the finest
+        rows = [r for r in data["rows"][:-1] if r.get("err_vs_finest") is not None]
+        n = coarsest_within([r["cells_across"] for r in rows],
+                            [r["err_vs_finest"] for r in rows], level)  # fmt: skip
+        if n is not None:
+            return f"{level:.0%} of the finest grid from {n} across (measured, {conv['kind']})"
+    return f"no {level:.0%} grid from {name}"
+
+
+def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[dict[str, Any]]:
+    """Each preset's default grid against its own series.
+
+    Parameters
+    ----------
+    result : dict
+        The suite's results (``work-precision`` and ``presets``).
+    table : dict
+        ``suite.toml`` ``[default-resolution]``: preset -> series and level.
+
+    Returns
+    -------
+    list of dict
+        One per preset of the presets table: its default cells across, the
+        error there, the level asked, the grid that reaches it, and whether
+        the default does (None where nothing measures it).
+    """
+    from foamsilo.scene import load_preset, preset_names
+
+    wp = result.get("work-precision") or {}
+    out = []
+    for preset in preset_names():
+        scene = load_preset(preset)
+        cells = scene.cells_across
+        row: dict[str, Any] = {"preset": preset, "representation": scene.representation,
+                               "cells_across": cells, "error": None, "within": None}  # fmt: skip
+        ask = table.get(preset)
+        if ask is None or ask["series"] not in wp:
+            row.update(level=None, how="no convergence series", needed="-")
+            out.append(row)
+            continue
+        level = float(ask["level"])
+        data = wp[ask["series"]]
+        err, how = _preset_error(data, cells)
+        row.update(level=level, error=err, how=f"{ask['series']}, {how}",
+                   needed=_needed(ask["series"], data, level))  # fmt: skip
+        row["within"] = None if err is None else abs(err) <= level
+        out.append(row)
+    return out
+
+
+def _preset_target(t: dict[str, Any], result: dict[str, Any]) -> tuple[float | None, str, str]:
+    rows = {r["preset"]: r for r in default_resolutions(result, {t["preset"]: t})}
+    res = rows[t["preset"]]
+    run = next((r for r in (result.get("presets") or {}).get("rows", [])
+                if r["label"] == t["preset"]), None)  # fmt: skip
+    if res["error"] is None or run is None or run.get("wall_s") is None:
+        return None, "not shown", "the preset or its series not run"
+    wall = float(run["wall_s"])
+    detail = (
+        f"{res['cells_across']} across: {res['error']:+.1%} ({res['how']}), "
+        f"{wall:.0f} s wall for its {run['simulated_time_s']:g} s"
+    )
+    if res["within"] and wall <= float(t["limit"]):
+        return wall, "met", detail
+    return wall, "missed", f"{detail}. In the way: {res['needed']}"
+
+
+def judge(result: dict[str, Any], table: dict[str, Any]) -> list[Verdict]:
+    """Return every target of ``suite.toml`` judged on the suite's results.
+
+    Parameters
+    ----------
+    result : dict
+        The suite's results.
+    table : dict
+        The whole ``suite.toml`` (``targets`` and ``default-resolution``).
+    """
+    wp = result.get("work-precision") or {}
+    out = []
+    for t in table.get("targets", []):
+        kind = t["kind"]
+        if kind == "cost":
+            value, verdict, detail = _cost_target(t, wp)
+        elif kind == "wall":
+            value, verdict, detail = _wall_target(t, wp)
+        elif kind == "cell-step":
+            value, verdict, detail = _cell_step_target(t, wp)
+        elif kind == "preset":
+            value, verdict, detail = _preset_target(t, result)
+        else:
+            raise ValueError(f"suite.toml target {t['name']!r}: kind {kind!r}; "
+                             f"valid: {', '.join(UNITS)}")  # fmt: skip
+        out.append(Verdict(t["name"], t["what"], kind, t["why"], float(t["limit"]),
+                           UNITS[kind], value, verdict, detail))  # fmt: skip
+    return out
+
+
+def as_dicts(verdicts: list[Verdict]) -> list[dict[str, Any]]:
+    """Plain data for ``suite.json``."""
+    return [asdict(v) for v in verdicts]
