@@ -111,3 +111,29 @@ def test_a_presets_default_grid_is_judged_against_its_series():
     # a preset with no series says so
     (r,) = [r for r in rows if r["preset"] == "zhou-rect-lateral"]
     assert (r["within"], r["how"]) == (None, "no convergence series")
+
+
+def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
+    # two meshings of one scene converging to Q_INF and to 1.5% above it: the
+    # converged Q is known only to their spread, so no grid is within 1% of
+    # both; at a spread of 0.4% the second-order series' grids within 0.6% of
+    # their own limit count
+    far = series([4, 8, 16, 32], p=2.0)
+    for r in far["rows"]:
+        r["Q"] *= 1.015
+    derive_work_precision(far)
+    wp = {"a": series([8, 16, 32, 64]), "b": far}
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=1e6)]})
+    assert v.verdict == "missed" and "no grid is within 1% of every extrapolation" in v.detail
+    assert "spread 1.5%" in v.detail
+    near = series([4, 8, 16, 32], p=2.0)
+    for r in near["rows"]:
+        r["Q"] *= 1.004
+    derive_work_precision(near)
+    wp = {"a": series([8, 16, 32, 64]), "b": near}
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=1e6)]})
+    # b at 8 across: 0.78% under its own limit, 0.38% under Q_INF (at 4: 2.7%
+    # and 3.1%); a is within 1% of b's limit where its own error is 0.6%, at
+    # 50 / 0.6 = 83 across, beyond its finest (64): projected
+    assert v.verdict == "met" and "b: 8 across (measured)" in v.detail
+    assert "a: 83 across (projected" in v.detail

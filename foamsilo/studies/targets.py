@@ -132,17 +132,29 @@ class _Resolution:
         return f"{self.series}: {self.cells:.0f} across ({how}){cost}"
 
 
-def _resolution(name: str, data: dict[str, Any], level: float) -> _Resolution | None:
-    """Return a series' coarsest grid within ``level`` of its extrapolation, with its cost."""
+def _resolution(
+    name: str, data: dict[str, Any], level: float, refs: list[float] | None = None
+) -> _Resolution | None:
+    """Return a series' coarsest grid within ``level`` of every extrapolated Q, with its cost.
+
+    ``refs``: the extrapolated Q of every series of the scene (default: this
+    series' own); the converged Q is known only to their spread, so a grid
+    counts where it is within ``level`` of each. Beyond the finest grid the
+    error model takes this series to ``level`` less its extrapolation's
+    distance to the farthest one; None where that distance is ``level`` or more.
+    """
     g = _grid(data.get("convergence"))
-    if g is None or g.error_vs_extrapolated is None:
+    if g is None or g.error_vs_extrapolated is None or g.extrapolated is None:
         return None
+    refs = refs or [g.extrapolated]
     family = _family(data)
-    n = g.coarsest_within(level)
+    errs = [max(abs(r["Q"] / e - 1) for e in refs) for r in family]
+    n = coarsest_within([r["cells_across"] for r in family], errs, level)
     if n is not None:
         row = next(r for r in family if r["cells_across"] == n)
         return _Resolution(name, float(n), _cost(row), True)
-    model = g.cells_for(level)
+    gap = max(abs(g.extrapolated / e - 1) for e in refs)
+    model = g.cells_for(level - gap) if gap < level else None
     if model is None:
         return None
     fit = cost_fit(family)
@@ -152,19 +164,40 @@ def _resolution(name: str, data: dict[str, Any], level: float) -> _Resolution | 
 
 def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str, str]:
     level = float(t["level"])
-    found = [r for s in t["series"] if s in wp
-             if (r := _resolution(s, wp[s], level)) is not None]  # fmt: skip
+    grids = {s: g for s in t["series"] if s in wp
+             if (g := _grid(wp[s].get("convergence"))) is not None}  # fmt: skip
     missing = [s for s in t["series"] if s not in wp]
-    if not found:
+    if not grids:
         return None, "not shown", "no series with a grid convergence estimate" + (
             f" ({', '.join(missing)} not run)" if missing else "")  # fmt: skip
+    refs = [float(g.extrapolated) for g in grids.values() if g.extrapolated is not None]
+    spread = max(refs) / min(refs) - 1
+    span = (
+        "extrapolated Q: "
+        + ", ".join(f"{s} {g.extrapolated:.5g} (order {g.order:.2f})" for s, g in grids.items())
+        + (
+            f"; their spread {spread:.1%}, within which the converged Q is known"
+            if len(refs) > 1
+            else ""
+        )  # fmt: skip
+    )
+    found = [r for s in grids if (r := _resolution(s, wp[s], level, refs)) is not None]
+    if not found:
+        return (
+            None,
+            "missed",
+            (
+                f"{span}. In the way: no grid is within {level:.0%} of every extrapolation, "
+                f"measured or by the error model (the orders are under the scheme's "
+                f"{FORMAL_ORDER:g}, the extrapolations {spread:.1%} apart)"
+            ),
+        )
     priced = [r for r in found if r.cost is not None]
     best = min(priced, key=lambda r: r.cost or math.inf) if priced else found[0]
     others = "; ".join(r.words() for r in found if r is not best)
-    g = _grid(wp[best.series]["convergence"])
-    assert g is not None  # _resolution found it
-    detail = f"cheapest: {best.words()}; {_order_words(g)}" + (
-        f". The others: {others}" if others else "")  # fmt: skip
+    g = grids[best.series]
+    detail = f"cheapest within {level:.0%} of every extrapolation: {best.words()}" + (
+        f"; the others: {others}" if others else "") + f". {span}"  # fmt: skip
     if best.cost is None:
         return None, "not shown", detail
     if best.cost <= float(t["limit"]):
