@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import pytest
 
+from foamsilo.scene import load_preset
 from foamsilo.studies.suite import derive_work_precision
 from foamsilo.studies.targets import default_resolutions, judge
 
@@ -90,23 +91,25 @@ def test_the_cost_per_cell_step_is_a_ratio_of_two_rows():
 
 
 def test_a_presets_default_grid_is_judged_against_its_series():
-    # zhou-planar's default is 64 across: on a first-order series with c = 0.5
-    # it is 0.78% low (measured row), within 1%; with c = 1 it is 1.6% low
-    for c, within in ((0.5, True), (1.0, False)):
-        wp = {"s": series([16, 32, 64, 128], c=c)}
+    # on a first-order series with c = 0.5 the preset's default grid n is
+    # 0.5/n low (measured row), with c = 4n/100 it is 4% low
+    n = load_preset("zhou-planar").cells_across
+    for c, within in ((0.5, True), (0.04 * n, False)):
+        wp = {"s": series([n // 4, n // 2, n, 2 * n], c=c)}
         rows = default_resolutions({"work-precision": wp},
                                    {"zhou-planar": {"series": "s", "level": 0.01}})  # fmt: skip
         (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
-        assert r["error"] == pytest.approx(-c / 64, rel=1e-6)
+        assert r["cells_across"] == n
+        assert r["error"] == pytest.approx(-c / n, rel=1e-6)
         assert r["within"] is within
         assert "measured" in r["how"]
         assert r["needed"].startswith("1% needs s: ")
-    # a grid between the rows takes the error model: 64 is left out
-    wp = {"s": series([16, 32, 128, 256], c=1.0)}
+    # a grid between the rows takes the error model: n is left out
+    wp = {"s": series([n // 4, n // 2, 2 * n, 4 * n], c=1.0)}
     rows = default_resolutions({"work-precision": wp},
                                {"zhou-planar": {"series": "s", "level": 0.01}})  # fmt: skip
     (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
-    assert r["error"] == pytest.approx(-1.0 / 64, rel=1e-6)
+    assert r["error"] == pytest.approx(-1.0 / n, rel=1e-6)
     assert "error model" in r["how"]
     # a preset with no series says so
     (r,) = [r for r in rows if r["preset"] == "zhou-rect-lateral"]
