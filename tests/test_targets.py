@@ -76,7 +76,17 @@ def test_a_wall_target_uses_the_reference_series_extrapolation():
              "reference": ["absent", "ref"], "level": 0.02, "limit": 1800.0}  # fmt: skip
         (v,) = judge({"work-precision": {"one": one, "ref": ref}}, {"targets": [t]})
         assert v.verdict == verdict, (q, wall, v)
-        assert "ref's extrapolation" in v.detail
+        assert "ref's 2 (" in v.detail
+    # with a second reference 1% above the first, 1.5% low on the first is
+    # 2.5% low on the farthest: no longer within 2%
+    high = series([8, 16, 32, 64])
+    for r in high["rows"]:
+        r["Q"] *= 1.01
+    derive_work_precision(high)
+    one["rows"][0]["Q"] = 0.985 * Q_INF
+    t["reference"] = ["ref", "high"]
+    (v,) = judge({"work-precision": {"one": one, "ref": ref, "high": high}}, {"targets": [t]})
+    assert v.verdict == "not shown" and "-2.5%" in v.detail
 
 
 def test_the_cost_per_cell_step_is_a_ratio_of_two_rows():

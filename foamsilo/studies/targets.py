@@ -212,28 +212,30 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     return best.cost, verdict, detail
 
 
-def _extrapolated(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str]:
-    """Return the extrapolated Q a ``wall`` target's rows are judged on, and whose it is."""
+def _extrapolated(t: dict[str, Any], wp: dict[str, Any]) -> list[tuple[float, str]]:
+    """Return every extrapolated Q a ``wall`` target's rows are judged on, each with whose."""
+    out = []
     for name in [t["series"][0], *t.get("reference", [])]:
         g = _grid((wp.get(name) or {}).get("convergence"))
-        if g is not None:
-            return g.extrapolated, f"{name}'s extrapolation ({_order_words(g)})"
-    return None, ""
+        if g is not None and g.extrapolated is not None:
+            out.append((g.extrapolated, f"{name}'s {g.extrapolated:.5g} ({_order_words(g)})"))
+    return out
 
 
 def _wall_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, str, str]:
     name, level = t["series"][0], float(t["level"])
     if name not in wp:
         return None, "not shown", f"{name} not run"
-    q_ext, whose = _extrapolated(t, wp)
+    refs = _extrapolated(t, wp)
     family = _family(wp[name])
-    if q_ext is None or not family:
+    if not refs or not family:
         return None, "not shown", f"no extrapolated Q for {name}"
-    errs = [r["Q"] / q_ext - 1 for r in family]
+    # the converged Q is known to the extrapolations' spread: the farthest counts
+    errs = [max((r["Q"] / q - 1 for q, _ in refs), key=abs) for r in family]
     table = ", ".join(f"{r['cells_across']} across {e:+.1%} ({r['wall_s'] / 60:.1f} min)"
                       for r, e in zip(family, errs, strict=True))  # fmt: skip
     n = coarsest_within([r["cells_across"] for r in family], errs, level)
-    detail = f"against {whose}: {table}"
+    detail = f"against the farthest of {'; '.join(w for _, w in refs)}: {table}"
     if n is None:
         return None, "not shown", f"no grid within {level:.0%}; {detail}"
     wall = next(r["wall_s"] for r in family if r["cells_across"] == n)
