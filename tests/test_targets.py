@@ -121,6 +121,20 @@ def test_a_presets_default_grid_is_judged_against_its_series():
     (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
     assert r["error"] == pytest.approx(-1.0 / n, rel=1e-6)
     assert "error model" in r["how"]
+    # the preset's own run on its default grid, where the suite has it, counts
+    # over the series' row or model (its end time, its window)
+    run = {"label": "zhou-planar", "cells_across": n, "outcome": "steady", "Q": 0.985 * Q_INF}
+    rows = default_resolutions({"work-precision": wp, "presets": {"rows": [run]}},
+                               {"zhou-planar": {"series": "s", "level": 0.01}})  # fmt: skip
+    (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
+    assert (r["error"], r["within"]) == (pytest.approx(-0.015), False)
+    assert "the preset's run" in r["how"]
+    # a run on another grid (an older default) does not
+    run["cells_across"] = n // 2
+    rows = default_resolutions({"work-precision": wp, "presets": {"rows": [run]}},
+                               {"zhou-planar": {"series": "s", "level": 0.01}})  # fmt: skip
+    (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
+    assert "error model" in r["how"]
     # a preset with no series says so
     (r,) = [r for r in rows if r["preset"] == "zhou-rect-lateral"]
     assert (r["within"], r["how"]) == (None, "no convergence series")

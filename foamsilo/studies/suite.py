@@ -469,6 +469,7 @@ def presets(
     for r in rows:
         scene = load_preset(r["preset"])
         r["representation"] = scene.representation
+        r["cells_across"] = scene.cells_across
         r["scheme"] = scene.stress_pressure_coupling
         r["flow_rate_scale"] = scene.flow_rate_scale[0]
     return {"rows": rows}

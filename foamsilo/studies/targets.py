@@ -330,6 +330,13 @@ def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[d
         level = float(ask["level"])
         data = wp[ask["series"]]
         err, how = _preset_error(data, cells)
+        # the preset's own run, where the suite ran it on this grid, over the model
+        run = next((r for r in (result.get("presets") or {}).get("rows", [])
+                    if r["label"] == preset and r.get("cells_across") == cells
+                    and r.get("outcome") == "steady" and r.get("Q")), None)  # fmt: skip
+        g = _grid(data.get("convergence"))
+        if run is not None and g is not None and g.extrapolated:
+            err, how = run["Q"] / g.extrapolated - 1, "the preset's run, against the extrapolated Q"
         row.update(level=level, error=err, how=f"{ask['series']}, {how}",
                    needed=_needed(ask["series"], data, level))  # fmt: skip
         row["within"] = None if err is None else abs(err) <= level
