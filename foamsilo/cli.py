@@ -1251,7 +1251,8 @@ def build_parser() -> argparse.ArgumentParser:
         "validation",
         cmd_bench_validation,
         "the validation suite: error against run time, Beverloo scaling, the gas-assisted "
-        "lab silo, stiff and extreme cases; checks with tolerances (exit 1 if one fails)",
+        "lab silo, stiff and extreme cases; checks with tolerances (exit 1 if one fails); "
+        "issue 18's cost targets and the presets' default grids judged on its rows",
     )
     sp.add_argument("--quick", action="store_true", help="the reduced suite (bash scripts/test)")
     sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")

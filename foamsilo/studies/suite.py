@@ -34,6 +34,10 @@ Entries
 ``time-step``
     Q on a fixed mesh at the default Courant limits and at smaller ones:
     whether a steady rate is converged in time (full suite only).
+
+The full report also judges issue 18's cost targets and the presets' default
+grids on these rows (:mod:`foamsilo.studies.targets`, ``suite.toml``
+``[[targets]]`` and ``[default-resolution]``).
 """
 
 from __future__ import annotations
