@@ -164,3 +164,18 @@ def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
     # 50 / 0.6 = 83 across, beyond its finest (64): projected
     assert v.verdict == "met" and "b: 8 across (measured)" in v.detail
     assert "a: 83 across (projected" in v.detail
+
+
+def test_a_finest_row_without_a_steady_rate_is_no_reference():
+    # the finest grid found no stationary regime: the errors "vs finest" and the
+    # 5%/2% resolutions are taken against the finest steady one
+    data = series([8, 16, 32, 64])
+    data["rows"].append({"cells_across": 128, "Q": None, "outcome": "not steady"})
+    derive_work_precision(data)
+    q64 = data["rows"][3]["Q"]
+    assert [r["err_vs_finest"] for r in data["rows"][:4]] == pytest.approx(
+        [abs(r["Q"] / q64 - 1) for r in data["rows"][:4]]
+    )
+    assert data["rows"][4]["err_vs_finest"] is None
+    # 0.5/16 - 0.5/64 = 2.3% > 2%, 0.5/32 - 0.5/64 = 0.78%
+    assert (data["recommend_5pct"], data["recommend_2pct"]) == (16, 32)

@@ -185,7 +185,9 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     from foamsilo.post.convergence import grid_convergence
 
     rows = data["rows"]
-    q_fin = rows[-1].get("Q")
+    # the finest row with a steady rate: a finer one that found none is no reference
+    q_fin = next((r["Q"] for r in reversed(rows) if r.get("Q") and r.get("outcome") == "steady"),
+                 None)  # fmt: skip
     for r in rows:
         q = r.get("Q")
         r["err_vs_finest"] = abs(q / q_fin - 1) if q and q_fin else None
