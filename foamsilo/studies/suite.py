@@ -70,7 +70,7 @@ from foamsilo.studies.cases import (
     summary_fields,
     wall_limits,
 )
-from foamsilo.studies.targets import as_dicts, cost_fit, default_resolutions, judge
+from foamsilo.studies.targets import as_dicts, cost_fit, default_resolutions, family, judge
 
 Row = dict[str, Any]
 OnRow = Callable[[Row], None] | None
@@ -201,9 +201,7 @@ def derive_work_precision(data: dict[str, Any]) -> None:
         r["o_grid_floored"] = _floored_row(r)
     # a 3D O-grid held at its floors is finer than its cells across say: no
     # refinement family with the finer rows (foamsilo.mesh.o_grid_floored)
-    steady = [
-        r for r in rows if r.get("Q") and r.get("outcome") == "steady" and not r["o_grid_floored"]
-    ]
+    steady = family(rows)
     data["convergence"] = None
     if len(steady) < 3:
         return

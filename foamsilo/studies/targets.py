@@ -104,9 +104,9 @@ def _grid(conv: dict[str, Any] | None) -> GridConvergence | None:
     return GridConvergence(**kwargs)
 
 
-def _family(data: dict[str, Any]) -> list[Row]:
+def family(rows: list[Row]) -> list[Row]:
     """Return the rows a series' convergence is judged on: steady, off an O-grid floor."""
-    return [r for r in data["rows"] if r.get("Q") and r.get("outcome") == "steady"
+    return [r for r in rows if r.get("Q") and r.get("outcome") == "steady"
             and not r.get("o_grid_floored")]  # fmt: skip
 
 
@@ -147,17 +147,17 @@ def _resolution(
     if g is None or g.error_vs_extrapolated is None or g.extrapolated is None:
         return None
     refs = refs or [g.extrapolated]
-    family = _family(data)
-    errs = [max(abs(r["Q"] / e - 1) for e in refs) for r in family]
-    n = coarsest_within([r["cells_across"] for r in family], errs, level)
+    steady = family(data["rows"])
+    errs = [max(abs(r["Q"] / e - 1) for e in refs) for r in steady]
+    n = coarsest_within([r["cells_across"] for r in steady], errs, level)
     if n is not None:
-        row = next(r for r in family if r["cells_across"] == n)
+        row = next(r for r in steady if r["cells_across"] == n)
         return _Resolution(name, float(n), _cost(row), True)
     gap = max(abs(g.extrapolated / e - 1) for e in refs)
     model = g.cells_for(level - gap) if gap < level else None
     if model is None:
         return None
-    fit = cost_fit(family)
+    fit = cost_fit(steady)
     cost = math.exp(fit[1]) * model ** fit[0] if fit else None
     return _Resolution(name, model, cost, False)
 
@@ -227,18 +227,18 @@ def _wall_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     if name not in wp:
         return None, "not shown", f"{name} not run"
     refs = _extrapolated(t, wp)
-    family = _family(wp[name])
-    if not refs or not family:
+    steady = family(wp[name]["rows"])
+    if not refs or not steady:
         return None, "not shown", f"no extrapolated Q for {name}"
     # the converged Q is known to the extrapolations' spread: the farthest counts
-    errs = [max((r["Q"] / q - 1 for q, _ in refs), key=abs) for r in family]
+    errs = [max((r["Q"] / q - 1 for q, _ in refs), key=abs) for r in steady]
     table = ", ".join(f"{r['cells_across']} across {e:+.1%} ({r['wall_s'] / 60:.1f} min)"
-                      for r, e in zip(family, errs, strict=True))  # fmt: skip
-    n = coarsest_within([r["cells_across"] for r in family], errs, level)
+                      for r, e in zip(steady, errs, strict=True))  # fmt: skip
+    n = coarsest_within([r["cells_across"] for r in steady], errs, level)
     detail = f"against the farthest of {'; '.join(w for _, w in refs)}: {table}"
     if n is None:
         return None, "not shown", f"no grid within {level:.0%}; {detail}"
-    wall = next(r["wall_s"] for r in family if r["cells_across"] == n)
+    wall = next(r["wall_s"] for r in steady if r["cells_across"] == n)
     verdict = "met" if wall <= float(t["limit"]) else "missed"
     return wall, verdict, f"{n} across; {detail}"
 
