@@ -90,6 +90,8 @@ def _uncertainty_line(s: dict[str, Any], units: str) -> str:
         order = f"observed order {c['order']:.2f}, " if c.get("order") is not None else ""
         if c.get("order_used") is not None and c["order_used"] < c["order"]:
             order += f"taken as the scheme's {c['order_used']:g}, "
+        elif c.get("order_used") is not None and c["order_used"] > c["order"]:
+            order += f"not yet asymptotic, taken as {c['order_used']:g} (Eca & Hoekstra 2014), "
         ext = (f"extrapolated {c['extrapolated']:.5g} {units}, "
                if c.get("extrapolated") is not None else "")  # fmt: skip
         return (

@@ -90,3 +90,21 @@ def test_an_order_above_the_formal_one_is_not_trusted():
     assert lower.order_used == pytest.approx(lower.order, rel=1e-12)
     with pytest.raises(FoamsiloError, match="formal_order"):
         grid_convergence(cells, values, formal_order=0.0)
+
+
+def test_an_order_near_zero_is_not_trusted():
+    # a rate that creeps up by about the same step per refinement (observed
+    # order near 0, not yet asymptotic): its own order would extrapolate far
+    # beyond every grid, so first order with Eca & Hoekstra's safety factor 3
+    cells = [64, 96, 128]
+    values = series(cells, 0.2)
+    g = grid_convergence(cells, values)
+    assert g.order == pytest.approx(0.2, rel=1e-9)
+    assert g.order_used == 1.0
+    r = 128 / 96
+    assert g.extrapolated == pytest.approx((r * values[2] - values[1]) / (r - 1), rel=1e-12)
+    assert g.gci == pytest.approx(3.0 * abs(values[1] / values[2] - 1) / (r - 1), rel=1e-12)
+    own = (r**0.2 * values[2] - values[1]) / (r**0.2 - 1)
+    assert abs(g.extrapolated - values[2]) < abs(own - values[2]) / 4
+    # from LOW_ORDER up the observed order is taken
+    assert grid_convergence(cells, series(cells, 0.6)).order_used == pytest.approx(0.6, rel=1e-9)

@@ -20,6 +20,14 @@ the GCI and the resolution for a level then take the formal order,
 in Computational Science and Engineering*, sec. 5.9; the observed order is
 still reported).
 
+An observed order under 0.5 is not trusted either: the grids are not yet in
+the asymptotic range, and as p falls to 0 the extrapolation runs off to
+infinity. Such a series is extrapolated at first order, with the safety
+factor 3 (Eca & Hoekstra 2014, "A procedure for the estimation of the
+numerical uncertainty of CFD calculations based on grid refinement
+studies", J. Comput. Phys. 262, 104: their factor for data whose observed
+order is off the theoretical one).
+
 Oscillatory convergence (e32 / e21 < 0) has no order; its uncertainty is half
 the range of the three values (Stern et al. 2001, J. Fluids Eng. 123, 793).
 A grid is described by its number of cells across (h ~ 1 / n).
@@ -35,6 +43,10 @@ from foamsilo.errors import FoamsiloError
 
 #: Roache's safety factor for a study of three or more grids
 SAFETY_FACTOR = 1.25
+#: Below this observed order a series is not in its asymptotic range
+#: (Eca & Hoekstra 2014): first order and ``LOW_ORDER_SAFETY_FACTOR`` are used
+LOW_ORDER = 0.5
+LOW_ORDER_SAFETY_FACTOR = 3.0
 #: The scheme's formal order in space (Gauss linear: second order; the code
 #: verification measures it, docs/validation/verification.md)
 FORMAL_ORDER = 2.0
@@ -69,7 +81,8 @@ class GridConvergence:
         asymptotic range gives about the same p throughout.
     order_used : float or None
         The order the extrapolation, the GCI and :meth:`cells_for` take: the
-        observed one, at most the formal order (monotone only).
+        observed one, at most the formal order; first order where the
+        observed one is under ``LOW_ORDER`` (monotone only).
     """
 
     cells: list[int]
@@ -190,10 +203,12 @@ def grid_convergence(
         half_range = (max(values[-3:]) - min(values[-3:])) / 2 / abs(f1)
         return GridConvergence(list(cells), list(values), "oscillatory", None, None,
                                half_range, None, triples)  # fmt: skip
-    used = min(p, formal_order)
+    low = p < LOW_ORDER
+    used = min(1.0 if low else p, formal_order)
     rp = (n1 / n2) ** used
     ext = (rp * f1 - f2) / (rp - 1)
-    gci = SAFETY_FACTOR * abs(e21 / f1) / (rp - 1)
+    safety = LOW_ORDER_SAFETY_FACTOR if low else SAFETY_FACTOR
+    gci = safety * abs(e21 / f1) / (rp - 1)
     errors = [v / ext - 1 for v in values]
     return GridConvergence(
         list(cells), list(values), "monotone", p, ext, gci, errors, triples, used

@@ -55,6 +55,7 @@ import numpy as np
 from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.jsonio import dumps
+from foamsilo.post.convergence import LOW_ORDER, LOW_ORDER_SAFETY_FACTOR
 from foamsilo.studies.cases import (
     Jobs,
     StudyCase,
@@ -827,11 +828,17 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
         return f"{head}; uncertainty of the finest {fmt(conv['gci'], '.1%')} (half the range)."
     by_triple = ", ".join(fmt(p, ".2f") for p in conv["orders_by_triple"])
     used = conv.get("order_used")
-    capped = (
-        f", above the scheme's formal order, so the extrapolation and the GCI take p = {used:g}"
-        if used is not None and used < conv["order"]
-        else ""
-    )
+    capped = ""
+    if used is not None and used < conv["order"]:
+        capped = (
+            f", above the scheme's formal order, so the extrapolation and the GCI take p = {used:g}"
+        )
+    elif used is not None and used > conv["order"]:
+        capped = (
+            f", under {LOW_ORDER:g}: not yet the asymptotic range, so the extrapolation and "
+            f"the GCI take p = {used:g} and the safety factor {LOW_ORDER_SAFETY_FACTOR:g} "
+            "(Eca & Hoekstra 2014)"
+        )
     parts = [
         f"{head}, observed order p = {conv['order']:.2f} (each run of three grids: {by_triple})"
         f"{capped}, extrapolated Q = {conv['extrapolated']:.5g}, GCI of the finest "
