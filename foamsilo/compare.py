@@ -108,14 +108,15 @@ def open_top_law(scene: Scene, orifice_width: float | None = None) -> tuple[str,
     """
     s = scene.silo
     D = s.orifice_width if orifice_width is None else orifice_width
-    if scene.representation == "planar":
+    bottom = s.orifice_position == "bottom" and s.eccentricity == 0.0
+    if scene.representation == "planar" and bottom:
         return "beverloo-2d", float(beverloo_2d(D, scene.material.density, scene.gravity))
-    if s.shape == "cylindrical" and s.orifice_position == "bottom" and s.eccentricity == 0.0:
+    if s.shape == "cylindrical" and bottom:
         return "zhou-eq1", zhou_eq1(scene, D)
     raise FoamsiloError(
         f"{scene.name}: no analytic open-top law for a {s.shape} silo "
         f"({scene.representation}, {s.orifice_position} orifice); laws exist for planar silos "
-        "(2D Beverloo) and cylinders with a centred bottom orifice (Zhou eq. 1)"
+        "with a centred bottom orifice (2D Beverloo) and cylinders with one (Zhou eq. 1)"
     )
 
 
