@@ -279,12 +279,18 @@ def test_the_stress_coupling_follows_the_column():
         "zhou-cyl-bottom": "implicit",  # axisymmetric
         "zhou-rect-bottom": "implicit",  # quasi-2D wall friction
         "zhou-planar-gas": "implicit",  # wall friction, gas-coupled
-        "zhou-cyl-lateral": "implicit",  # 3D, 12.5 widths
-        "zhou-cyl-lateral-rect": "lagged",  # 3D, 8.3 widths
-        "venier-test2": "lagged",  # 3D, 1.5 widths
+        "zhou-cyl-lateral": "implicit",  # 3D, 12.5 diameters
+        "zhou-cyl-lateral-rect": "implicit",  # 3D, 8.3 diameters
+        "venier-test2": "lagged",  # 3D, 1.5 diameters
     }
     tall = load_preset("zhou-planar", ["silo.height=2.0", "silo.fill_height=1.95"])
     assert tall.stress_pressure_coupling == "implicit"
+    # the boundary: 10 widths planar, 5 diameters in a cylinder (A/P = L/2, D/4)
+    planar = load_preset("zhou-planar", ["silo.height=1.2", "silo.fill_height=0.99"])
+    assert planar.stress_pressure_coupling == "lagged"
+    for fill, expected in ((20.9, "lagged"), (21.1, "implicit")):  # D = 4.2 m
+        column = load_preset("venier-test2", ["silo.height=22", f"silo.fill_height={fill}"])
+        assert column.stress_pressure_coupling == expected
     forced = load_preset("zhou-cyl-lateral", ["numerics.stress_pressure_coupling='lagged'"])
     assert forced.stress_pressure_coupling == "lagged"
 

@@ -19,11 +19,13 @@ from foamsilo.scene.schema import field_spec as _f
 GRAVITY = 9.81
 #: Opening angle of an axisymmetric wedge mesh [deg] (OpenFOAM: at most 5)
 WEDGE_ANGLE_DEG = 5.0
-#: Fill height over width above which a planar or 3D column gets the implicit
-#: stress-pressure coupling by default: there the lagged wall stress carries
-#: the last iterate's pressure down the column and the rate swings from step
-#: to step, or the run diverges (docs/solver.md, "Tall columns")
-TALL_COLUMN = 10.0
+#: Fill height over the cross-section's area per unit length of wall (A/P:
+#: L/2 for a planar silo, D/4 for a cylinder; Janssen's length without K mu_w)
+#: above which a planar or 3D column gets the implicit stress-pressure coupling
+#: by default: there the lagged wall stress carries the last iterate's pressure
+#: down the column and the rate swings from step to step, or the run diverges
+#: (docs/solver.md, "Tall columns"). 20: a planar column of 10 widths
+TALL_COLUMN = 20.0
 #: Equivalent fill height, in silo widths, below which the discharge is over
 #: (Scene.emptied_height)
 EMPTIED_FILL = 0.5
@@ -571,9 +573,10 @@ class Numerics:
         "the granular stress's share of a pressure change in the projection: taken "
         "implicitly (d tau/d p in the pressure equation), or lagged to the next outer "
         "iteration, where a tall column's wall stress feeds the pressure back; default: "
-        "implicit in axisymmetric scenes, ones with quasi-2D wall friction and columns "
-        "filled higher than 10 widths, lagged in other planar and 3D ones (why: "
-        "docs/solver.md)",
+        "implicit in axisymmetric scenes, ones with quasi-2D wall friction and tall "
+        "columns (filled higher than 20 times the cross-section's area per unit length "
+        "of wall: 10 widths planar, 5 diameters in a cylinder), lagged in other planar "
+        "and 3D ones (why: docs/solver.md, 'Tall columns')",
         default=None,
     )
     stress_pressure_divergence: float = _f(
@@ -700,6 +703,22 @@ class Scene:
         return math.pi * s.width**2 / 4
 
     @property
+    def wall_length_scale(self) -> float:
+        """Cross-section area per unit length of wall, A/P [m].
+
+        Planar: L/2 (two walls per unit depth); a box: L W / (2 (L + W)); a
+        cylinder or a hopper: D/4. The wall stress's reach down a column
+        (Janssen) scales with it.
+        """
+        s = self.silo
+        if self.representation == "planar":
+            return s.width / 2
+        if s.shape == "rectangular":
+            assert s.thickness is not None
+            return s.width * s.thickness / (2 * (s.width + s.thickness))
+        return s.width / 4
+
+    @property
     def flow_rate_scale(self) -> tuple[str, float]:
         """Name and value of the scale Q is made dimensionless with.
 
@@ -717,7 +736,7 @@ class Scene:
         if self.numerics.stress_pressure_coupling is not None:
             return self.numerics.stress_pressure_coupling
         # where a tall column's wall stress carries the pressure (docs/solver.md)
-        tall = self.silo.fill_height > TALL_COLUMN * self.silo.width
+        tall = self.silo.fill_height > TALL_COLUMN * self.wall_length_scale
         implicit = self.representation == "axisymmetric" or self.wall_friction or tall
         return "implicit" if implicit else "lagged"
 
