@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from foamsilo.analytic.exact import hydraulic_radius
 from foamsilo.analytic.rheology import BARKER_GRAY_ALPHA, FrictionLaw
 from foamsilo.scene.schema import field_spec as _f
 
@@ -704,7 +705,7 @@ class Scene:
 
     @property
     def wall_length_scale(self) -> float:
-        """Cross-section area per unit length of wall, A/P [m].
+        """Cross-section area per unit length of wall, A/P [m] (the hydraulic radius).
 
         Planar: L/2 (two walls per unit depth); a box: L W / (2 (L + W)); a
         cylinder or a hopper: D/4. The wall stress's reach down a column
@@ -712,11 +713,10 @@ class Scene:
         """
         s = self.silo
         if self.representation == "planar":
-            return s.width / 2
+            return hydraulic_radius("slot", s.width)
         if s.shape == "rectangular":
-            assert s.thickness is not None
-            return s.width * s.thickness / (2 * (s.width + s.thickness))
-        return s.width / 4
+            return hydraulic_radius("box", s.width, s.thickness)
+        return hydraulic_radius("cylinder", s.width)
 
     @property
     def flow_rate_scale(self) -> tuple[str, float]:
