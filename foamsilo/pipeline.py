@@ -828,8 +828,8 @@ def _check_grid_family(source: str, overrides: list[str], scene: Scene, ratio: f
     raise InputError(
         f"mesh.cells_across = {scene.cells_across}: a grid study's grids at "
         f"{', '.join(map(str, bad))} across hold counts of the 3D O-grid at their floors "
-        f"({MIN_QUADRANT_CELLS} cells on a quarter circle, {MIN_QUADRANT_CELLS // 2} beside "
-        "a lateral orifice, 2 radially), finer there than "
+        f"({MIN_QUADRANT_CELLS} cells on a quarter circle, cells no wider in angle than "
+        "those beside a lateral orifice, 2 radially), finer there than "
         f"their cells across say, so the three are not one refinement family and their "
         f"GCI would be too small; allowed for this scene: {allowed} "
         "(docs/post.md, 'The uncertainty of Q')"

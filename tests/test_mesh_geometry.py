@@ -178,3 +178,33 @@ def test_the_orifice_edge_is_refined_only_on_graded_meshes():
         load_preset("venier-test2", ["mesh.orifice_edge_refinement=4"])  # eccentric, uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement"):
         load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=0.5"])
+
+
+@pytest.mark.parametrize("preset", ["zhou-cyl-lateral", "zhou-cyl-lateral-rect"])
+def test_the_arcs_beside_a_lateral_orifice_refine_with_the_cells(preset):
+    """Each arc of the orifice's quadrant follows the cell size above an angular floor.
+
+    The floor is the widest cell angle a quarter circle may hold (its 12
+    cells), so that an arc beside the orifice is never held finer than the
+    rest of the wall, and a refinement study's regular grids start where the
+    quarters' own floor ends.
+    """
+    from foamsilo.mesh import ogrid_for
+    from foamsilo.mesh.layout import MIN_QUADRANT_CELLS
+
+    widest = (np.pi / 2) / MIN_QUADRANT_CELLS
+
+    def quadrant(n):
+        og = ogrid_for(load_preset(preset, [f"mesh.cells_across={n}"]))
+        return og, [(b - a, c) for a, b, c in og.arcs[0]]
+
+    for n in range(12, 97, 4):
+        og, arcs = quadrant(n)
+        for angle, cells in arcs:
+            assert angle / cells <= widest * (1 + 1e-9)  # the polygon's fidelity
+        # a regular grid: every arc and the quarters above their floors
+        if n >= 36:
+            assert not og.floored, n
+    # the arcs beside the orifice double with the cells across (to a cell's rounding)
+    side = {n: quadrant(n)[1][0][1] for n in (48, 96)}
+    assert abs(side[96] - 2 * side[48]) <= 1, side

@@ -478,7 +478,8 @@ class OGrid:
     (and the square) make the bottom orifice; ``lateral_arc`` is the angular
     segment of the wall that is a lateral orifice (or None). ``floored``: a
     count was raised to its floor (``MIN_QUADRANT_CELLS`` on a quarter
-    circle, two radial cells) above what the cell size asks for, so the
+    circle, an arc beside a lateral orifice no wider in angle than those,
+    two radial cells) above what the cell size asks for, so the
     cross-section is finer than the scene's cells across say; such a grid is
     not one refinement family with finer ones.
     """
@@ -500,6 +501,17 @@ class OGrid:
         return na * nb + around * sum(n for n, _ in self.ring_cells)
 
 
+def widest_arc_cells(angle: float) -> int:
+    """Fewest cells on a wall arc of ``angle`` radians: none wider than a floored quarter's.
+
+    The floor is an angle, the polygon's fidelity to the circle, so that an
+    arc beside a lateral orifice is held no finer than the quarters are (a
+    count as floor would hold a narrow arc fixed, finer than its cells say,
+    on every grid a study affords).
+    """
+    return math.ceil(angle / (math.pi / 2 / MIN_QUADRANT_CELLS) - 1e-9)
+
+
 def ogrid_for(scene: Scene) -> OGrid:
     """Lay out the O-grid of a cylinder's (or a 3D hopper's top) cross-section."""
     s = scene.silo
@@ -517,7 +529,12 @@ def ogrid_for(scene: Scene) -> OGrid:
             round(2 * q * R / (2 * h)),
             round((1 - 0.6) * R / h),
         )
-        floors = (2, MIN_QUADRANT_CELLS // 2, MIN_QUADRANT_CELLS, 2)
+        floors = (
+            max(2, widest_arc_cells(2 * tw)),
+            max(1, widest_arc_cells(q - tw)),
+            MIN_QUADRANT_CELLS,
+            2,
+        )
         n_orf, n_side, n_b, n_r = (max(f, n) for f, n in zip(floors, raw, strict=True))
         quad0 = ((-q, -tw, n_side), (-tw, tw, n_orf), (tw, q, n_side))
         n_a = 2 * n_side + n_orf
