@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -436,3 +437,33 @@ def test_a_3d_series_leaves_its_o_grid_floor_rows_out_of_the_convergence():
     data = {"rows": [row(n) for n in (40, 56, 80, 112)], "Q_law": None}
     derive_work_precision(data)
     assert data["convergence"] is None
+
+
+def test_a_partial_run_into_a_fresh_report_directory_writes_its_report(tmp_path):
+    """`--only` one series with `-o` a new directory: the report holds what ran, no crash.
+
+    The checks of series that did not run are left out, not read from a
+    result that lacks them (a KeyError there once lost a finished run's rows).
+    """
+    from foamsilo.studies.cases import machine_info
+    from foamsilo.studies.suite import derive_work_precision, write_report
+
+    def row(n, q):
+        return {"label": f"{n} across", "preset": "zhou-cyl-lateral-rect",
+                "sets": [f"mesh.cells_across={n}"], "cells_across": n, "Q": q,
+                "outcome": "steady", "wall_s": 5.0 * n, "cpu_s": 10.0 * n,
+                "simulated_time_s": 0.6, "cells": 1000 * n}  # fmt: skip
+
+    key = "work-precision/zhou-cyl-lateral-rect"
+    series = {"law": None, "Q_law": None,
+              "rows": [row(30, 0.0422), row(40, 0.0457), row(48, 0.0470)]}  # fmt: skip
+    derive_work_precision(series)
+    result = {"quick": False, "machine": machine_info(), "jobs": "1 case at a time",
+              "work-precision": {"zhou-cyl-lateral-rect": series},
+              "commits": {key: "abc"}, "commit": "abc", "wall_s": {key: 10.0}}  # fmt: skip
+    res = write_report(result, tmp_path, "suite")
+    assert res["checks"] == []  # no check reads this series
+    assert json.loads((tmp_path / "suite.json").read_text())["work-precision"].keys() == {
+        "zhou-cyl-lateral-rect"
+    }
+    assert "**zhou-cyl-lateral-rect**" in (tmp_path / "suite.md").read_text()
