@@ -111,3 +111,27 @@ def test_an_order_near_zero_is_not_trusted():
     assert abs(g.extrapolated - values[2]) < abs(own - values[2]) / 4
     # from LOW_ORDER up the observed order is taken
     assert grid_convergence(cells, series(cells, 0.6)).order_used == pytest.approx(0.6, rel=1e-9)
+
+
+@pytest.mark.parametrize("cells", [[10, 20, 40], [30, 36, 40], [36, 48, 72, 96]])
+@pytest.mark.parametrize("p", [-1.0, -0.3])
+def test_a_diverging_series_gets_its_negative_order(cells, p):
+    # increments that grow as the grid is refined (phi ~ C n^|p|): Celik's
+    # eq. 3 with its absolute value gave such a series a positive order (with
+    # equal ratios |p|; with 30/36/40 across even one above 2, whose
+    # extrapolation and GCI at the formal order then looked converged)
+    values = series(cells, p)
+    g = grid_convergence(cells, values)
+    assert g.kind == "monotone"
+    assert g.order == pytest.approx(p, rel=1e-9)
+    # not in the asymptotic range: first order and the safety factor 3
+    assert_richardson(g, cells, values, 1.0, 3.0)
+
+
+def test_the_order_takes_each_triples_ratios():
+    # the 3D lateral silo's three regular grids (refinement ratios 1.2 and
+    # 1.11): its increments per refinement are nearly equal, that is they
+    # shrink more slowly than any positive order allows over these ratios
+    g = grid_convergence([30, 36, 40], [0.095362, 0.09619, 0.097009])
+    assert g.order is not None and g.order < 0
+    assert g.order_used == 1.0 and g.gci > 0.2

@@ -6,8 +6,11 @@ of uncertainty due to discretization in CFD applications", J. Fluids Eng.
 J. Fluids Eng. 116, 405): from the three finest of a series of grids, with
 possibly unequal refinement ratios,
 
-* the observed order p, solved by fixed-point iteration of
-  ``p = |ln|e32/e21| + q(p)| / ln r21``, ``q(p) = ln((r21^p - s) / (r32^p - s))``;
+* the observed order p, the root of ``p ln r21 = ln(e32/e21) + q(p)``,
+  ``q(p) = ln((r21^p - 1) / (r32^p - 1))`` (Celik's eq. 3 for monotone
+  convergence, s = 1, without its absolute value, which gave a positive
+  order to increments that shrink too slowly for any: such a series has a
+  negative order here, and is treated as one under 0.5, below);
 * the extrapolated value ``phi_ext = (r21^p phi1 - phi2) / (r21^p - 1)``;
 * the fine-grid index ``GCI = 1.25 |phi1 - phi2| / |phi1| / (r21^p - 1)``
   (1.25: Roache's safety factor for a three-grid study).
@@ -50,8 +53,10 @@ LOW_ORDER_SAFETY_FACTOR = 3.0
 #: The scheme's formal order in space (Gauss linear: second order; the code
 #: verification measures it, docs/validation/verification.md)
 FORMAL_ORDER = 2.0
-#: Fixed-point iterations for the order (it converges in a handful for r near 2)
+#: Bisection steps for the order, and its bracket's ends
 _ITERATIONS = 200
+_ORDER_EPS = 1e-9
+_ORDER_MAX = 64.0
 
 
 @dataclass(frozen=True)
@@ -133,23 +138,47 @@ def coarsest_within(cells: list[int], errors: list[float], level: float) -> int 
     return None
 
 
+def _increment_ratio(r21: float, r32: float, p: float) -> float:
+    """Return the ratio e32 / e21 that an error C h^p gives on three grids (p != 0)."""
+    return r21**p * (r32**p - 1) / (r21**p - 1)
+
+
 def _order(r21: float, r32: float, e21: float, e32: float) -> float | None:
-    """Observed order of three grids (Celik et al. 2008, eqs. 3-4); None when not monotone."""
+    """Observed order of three grids (Celik et al. 2008, eqs. 3-4); None when not monotone.
+
+    The order solves ``e32 / e21 = r21^p (r32^p - 1) / (r21^p - 1)``, Celik's
+    eq. 3 without its absolute value, by bisection: the ratio rises with p,
+    from 0 (p -> -inf) through ``ln r32 / ln r21`` (p -> 0). With the
+    absolute value a series whose increments shrink more slowly than any
+    positive order allows (its refinement ratios unequal, or its increments
+    growing) got a positive order, even a high one; here its order is
+    negative (not in the asymptotic range, or diverging).
+    """
     ratio = e32 / e21
     if ratio <= 0:
         return None
-    s = 1.0
-    # the equal-ratio order as the start, but clear of p = 0 where r^p - 1 vanishes
-    p = max(abs(math.log(ratio)) / math.log(r21), 0.5)
+    at_zero = math.log(r32) / math.log(r21)
+    if ratio == at_zero:
+        return 0.0
+    # a bracket: [lo, hi] holds the root, on the side of p = 0 the ratio says
+    lo, hi = (_ORDER_EPS, 1.0) if ratio > at_zero else (-1.0, -_ORDER_EPS)
+    while ratio > at_zero and _increment_ratio(r21, r32, hi) < ratio:
+        lo, hi = hi, 2 * hi
+        if hi > _ORDER_MAX:
+            return _ORDER_MAX
+    while ratio < at_zero and _increment_ratio(r21, r32, lo) > ratio:
+        lo, hi = 2 * lo, lo
+        if lo < -_ORDER_MAX:
+            return -_ORDER_MAX
     for _ in range(_ITERATIONS):
-        a, b = r21**p - s, r32**p - s
-        if a <= 0 or b <= 0:
-            return None
-        p_new = abs(math.log(ratio) + math.log(a / b)) / math.log(r21)
-        if abs(p_new - p) < 1e-12:
-            return p_new
-        p = p_new
-    return p
+        mid = (lo + hi) / 2
+        if _increment_ratio(r21, r32, mid) < ratio:  # the ratio rises with p
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-13:
+            break
+    return (lo + hi) / 2
 
 
 def grid_convergence(
