@@ -128,7 +128,7 @@ def test_a_diverging_series_gets_its_negative_order(cells, p):
     assert_richardson(g, cells, values, 1.0, 3.0)
 
 
-def test_the_order_takes_each_triples_ratios():
+def test_equal_increments_over_shrinking_ratios_get_no_positive_order():
     # the 3D lateral silo's three regular grids (refinement ratios 1.2 and
     # 1.11): its increments per refinement are nearly equal, that is they
     # shrink more slowly than any positive order allows over these ratios
