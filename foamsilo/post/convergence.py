@@ -42,6 +42,8 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from scipy.optimize import brentq
+
 from foamsilo.errors import FoamsiloError
 
 #: Roache's safety factor for a study of three or more grids
@@ -53,8 +55,7 @@ LOW_ORDER_SAFETY_FACTOR = 3.0
 #: The scheme's formal order in space (Gauss linear: second order; the code
 #: verification measures it, docs/validation/verification.md)
 FORMAL_ORDER = 2.0
-#: Bisection steps for the order, and its bracket's ends
-_ITERATIONS = 200
+#: The order's bracket: its ends
 _ORDER_EPS = 1e-9
 _ORDER_MAX = 64.0
 
@@ -147,7 +148,7 @@ def _order(r21: float, r32: float, e21: float, e32: float) -> float | None:
     """Observed order of three grids (Celik et al. 2008, eqs. 3-4); None when not monotone.
 
     The order solves ``e32 / e21 = r21^p (r32^p - 1) / (r21^p - 1)``, Celik's
-    eq. 3 without its absolute value, by bisection: the ratio rises with p,
+    eq. 3 without its absolute value (Brent's method): the ratio rises with p,
     from 0 (p -> -inf) through ``ln r32 / ln r21`` (p -> 0). With the
     absolute value a series whose increments shrink more slowly than any
     positive order allows (its refinement ratios unequal, or its increments
@@ -160,25 +161,14 @@ def _order(r21: float, r32: float, e21: float, e32: float) -> float | None:
     at_zero = math.log(r32) / math.log(r21)
     if ratio == at_zero:
         return 0.0
-    # a bracket: [lo, hi] holds the root, on the side of p = 0 the ratio says
-    lo, hi = (_ORDER_EPS, 1.0) if ratio > at_zero else (-1.0, -_ORDER_EPS)
-    while ratio > at_zero and _increment_ratio(r21, r32, hi) < ratio:
-        lo, hi = hi, 2 * hi
-        if hi > _ORDER_MAX:
-            return _ORDER_MAX
-    while ratio < at_zero and _increment_ratio(r21, r32, lo) > ratio:
-        lo, hi = 2 * lo, lo
-        if lo < -_ORDER_MAX:
-            return -_ORDER_MAX
-    for _ in range(_ITERATIONS):
-        mid = (lo + hi) / 2
-        if _increment_ratio(r21, r32, mid) < ratio:  # the ratio rises with p
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-13:
-            break
-    return (lo + hi) / 2
+    # the root lies on the side of p = 0 the ratio says (the model ratio rises with p)
+    lo, hi = (_ORDER_EPS, _ORDER_MAX) if ratio > at_zero else (-_ORDER_MAX, -_ORDER_EPS)
+    miss = [_increment_ratio(r21, r32, p) - ratio for p in (lo, hi)]
+    if miss[1] < 0:
+        return _ORDER_MAX
+    if miss[0] > 0:
+        return -_ORDER_MAX
+    return float(brentq(lambda p: _increment_ratio(r21, r32, p) - ratio, lo, hi, xtol=1e-13))
 
 
 def grid_convergence(
