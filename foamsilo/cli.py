@@ -833,6 +833,7 @@ def cmd_bench_validation(args: argparse.Namespace) -> int:
                 jobs=_cases_progress(args, jobs),
                 limit=args.time_limit,
                 on_row=_row_printer(args),
+                values=args.values,
             )
     failed = [c for c in res["checks"] if not c["passed"]]
 
@@ -1256,6 +1257,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sp.add_argument("--quick", action="store_true", help="the reduced suite (bash scripts/test)")
     sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
+    sp.add_argument(
+        "--values",
+        nargs="+",
+        type=float,
+        metavar="N",
+        help="with --only work-precision/NAME: these of its resolutions only (listed in "
+        "suite.toml), their rows put into the series of the report in -o",
+    )
     sp.add_argument("--jobs", type=int, default=2, help="cases run at once")
     sp.add_argument(
         "--time-limit",

@@ -467,3 +467,80 @@ def test_a_partial_run_into_a_fresh_report_directory_writes_its_report(tmp_path)
         "zhou-cyl-lateral-rect"
     }
     assert "**zhou-cyl-lateral-rect**" in (tmp_path / "suite.md").read_text()
+
+
+def _series_row(n, q, sets=()):
+    return {"label": f"{n} across", "preset": "zhou-cyl-bottom", "case_dir": f"/nowhere/{n}",
+            "sets": [f"mesh.cells_across={n}", *sets], "cells_across": n, "Q": q,
+            "outcome": "steady", "wall_s": 2.0 * n, "cpu_s": 2.0 * n,
+            "simulated_time_s": 0.6, "cells": 100 * n}  # fmt: skip
+
+
+def test_some_rows_of_a_series_rerun_into_the_report_and_the_others_kept(tmp_path, monkeypatch):
+    """`--only work-precision/NAME --values ...`: those rows run, the others stay.
+
+    The new rows take their places in the series' order and in the work
+    directory (an earlier case at another place is not overwritten), a row at
+    a resolution the series no longer lists goes, the grid convergence is
+    taken again over the whole series, and the series' commit, time and
+    machine keep the earlier run's beside the new one's.
+    """
+    from foamsilo.studies import suite
+    from foamsilo.studies.cases import study_table
+
+    name, key = "zhou-cyl-bottom-graded", "work-precision/zhou-cyl-bottom-graded"
+    entry = next(e for e in study_table("suite")["work-precision"] if e.get("name") == name)
+    cells = entry["values"]
+    assert {36, 48, 72, 96, 144, 192} <= set(cells) and 100 not in cells
+    q = {36: 0.0259, 48: 0.0280, 72: 0.0300, 96: 0.0309, 100: 0.5, 144: 0.0320}
+    old = {"work-precision": {name: {"law": None, "Q_law": None,
+                                     "rows": [_series_row(n, v) for n, v in q.items()]}},
+           "wall_s": {key: 100.0}, "commits": {key: "abc1234"}, "jobs": "2 cases at a time",
+           "jobs_by_entry": {key: "2 cases at a time"}, "cpu_by_entry": {key: "Elsewhere CPU"},
+           "machine": {"cpu": "Elsewhere CPU", "cores": 2}}  # fmt: skip
+    (tmp_path / "suite.json").write_text(json.dumps(old))
+    ran = []
+
+    def fake_rows(cases, work, jobs, limit, on_row=None, dirs=None):
+        ran.append(([c.label for c in cases], dirs, Path(work).name))
+        new_q = {96: 0.0310, 192: 0.03245}
+        return [_series_row(n, new_q[n]) for n in (int(c.label.split()[0]) for c in cases)]
+
+    monkeypatch.setattr(suite, "run_rows", fake_rows)
+    monkeypatch.setattr(suite, "git_commit", lambda: "def5678")
+    result = suite.run_suite(False, tmp_path, tmp_path / "work",
+                             only=[key], jobs=1, values=[192, 96])  # fmt: skip
+    places = [f"{cells.index(n):02d}" for n in (96, 192)]
+    assert ran == [(["96 across", "192 across"], places, name)]
+    series = result["work-precision"][name]
+    assert [r["cells_across"] for r in series["rows"]] == [36, 48, 72, 96, 144, 192]
+    assert [r["Q"] for r in series["rows"]] == [0.0259, 0.0280, 0.0300, 0.0310, 0.0320, 0.03245]
+    # the grid convergence taken again, on the new rows: the finest three
+    conv = series["convergence"]
+    assert conv["values"][-3:] == [0.0310, 0.0320, 0.03245]
+    assert conv["kind"] == "monotone" and conv["extrapolated"] > 0.03245
+    assert result["commits"][key] == "abc1234, def5678"
+    assert result["commit"] == "abc1234, def5678"
+    assert result["cpu_by_entry"][key] == f"Elsewhere CPU, {result['machine']['cpu']}"
+    assert result["wall_s"][key] >= 100.0
+    saved = json.loads((tmp_path / "suite.json").read_text())
+    assert [r["cells_across"] for r in saved["work-precision"][name]["rows"]][-1] == 192
+
+
+@pytest.mark.parametrize(
+    ("only", "values", "match"),
+    [
+        (None, [96], r"--values: needs one series"),
+        (["work-precision/zhou-cyl-bottom-graded", "presets"], [96], r"needs one series"),
+        (["presets/zhou-planar"], [96], r"needs one series"),
+        (["work-precision"], [96], r"needs one series"),
+        (["work-precision/zhou-cyl-bottom-graded"], [100],
+         r"has no resolution 100; its resolutions: 36, 48, 72, 96, 144"),
+    ],
+)  # fmt: skip
+def test_rows_of_a_series_are_refused_unless_the_series_lists_them(tmp_path, only, values, match):
+    from foamsilo.studies.suite import run_suite
+
+    with pytest.raises(FoamsiloError, match=match):
+        run_suite(False, tmp_path, tmp_path / "work", only=only, values=values)
+    assert not any(tmp_path.iterdir())  # refused before anything ran or was written

@@ -216,9 +216,16 @@ def run_rows(
     jobs: Jobs,
     limit: float | None,
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    dirs: list[str] | None = None,
 ) -> list[dict[str, Any]]:
-    """Run the cases (``jobs`` at a time, or on a backend) in ``work/NN``; a row each, in order."""
-    specs = [c.spec(Path(work) / f"{i:02d}", limit) for i, c in enumerate(cases)]
+    """Run the cases (``jobs`` at a time, or on a backend); a row each, in order.
+
+    Each case runs in ``work/NN``, NN its place in ``cases``, or in ``work/D``
+    with ``dirs`` (a part of a study keeps its cases' places in the whole, so
+    that a rerun of some rows in the same work directory overwrites no other).
+    """
+    names = dirs if dirs is not None else [f"{i:02d}" for i in range(len(cases))]
+    specs = [c.spec(Path(work) / d, limit) for d, c in zip(names, cases, strict=True)]
     Path(work).mkdir(parents=True, exist_ok=True)  # made once, not by racing workers
     by_dir = {s.case_dir: c for s, c in zip(specs, cases, strict=True)}
 

@@ -132,35 +132,82 @@ def work_precision(
     limit: float,
     on_row: OnRow = None,
     series: str | None = None,
+    values: list[float] | None = None,
+    earlier: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Steady Q against resolution and wall time, planar and axisymmetric.
 
     Each series is named by its ``name`` (default: its preset); ``series``
     runs that one only. A series with no ``quick_values`` is left out of the
-    quick suite.
+    quick suite. With ``values`` (``series`` named) only those resolutions
+    run, and their rows replace or join those of ``earlier`` (the series as
+    the last report holds it; rows of resolutions no longer in its entry go).
+
+    Raises
+    ------
+    FoamsiloError
+        ``values`` without a ``series``, or a value that is not one of the
+        series' resolutions.
     """
     from foamsilo.compare import open_top_law
     from foamsilo.scene import load_preset
 
     entries = study_table("suite")["work-precision"]
     names = work_precision_series()
+    if values is not None and series is None:
+        raise FoamsiloError("--values: needs one series, --only work-precision/NAME")
     out: dict[str, Any] = {}
     for name, entry in zip(names, entries, strict=True):
         if (series is not None and name != series) or (quick and "quick_values" not in entry):
             continue
         preset = entry["preset"]
         cells, cases = _series(entry, quick)
-        rows = run_rows(cases, work / name, jobs, limit, on_row)
+        keep = _chosen(name, cells, values)
+        rows = run_rows([cases[i] for i in keep], work / name, jobs, limit, on_row,
+                        dirs=[f"{i:02d}" for i in keep])  # fmt: skip
+        for r, i in zip(rows, keep, strict=True):
+            r["cells_across"] = cells[i]
+        if values is not None:
+            rows = _merged_rows((earlier or {}).get("rows", []), rows, cells)
         # a scene with no analytic law (a hopper) says so in its entry
         law_name, q_law = (None, None) if entry.get("law") is False else open_top_law(
             load_preset(preset))  # fmt: skip
-        for r, n in zip(rows, cells, strict=True):
-            r["cells_across"] = n
         out[name] = {"law": law_name, "Q_law": q_law, "rows": rows}
         if entry.get("about"):
             out[name]["about"] = entry["about"]
         derive_work_precision(out[name])
     return out
+
+
+def _chosen(name: str, cells: list[Any], values: list[float] | None) -> list[int]:
+    """Places in a series' resolutions of ``values`` (all without).
+
+    Raises
+    ------
+    FoamsiloError
+        A value that is not one of the series' resolutions (they are listed).
+    """
+    if values is None:
+        return list(range(len(cells)))
+    bad = [v for v in values if v not in cells]
+    if bad:
+        raise FoamsiloError(
+            f"--values: work-precision/{name} has no resolution {bad[0]:g}; its resolutions: "
+            + ", ".join(f"{c:g}" for c in cells)
+            + " (a new one goes into its entry in suite.toml first)"
+        )
+    return [i for i, c in enumerate(cells) if c in values]
+
+
+def _merged_rows(earlier: list[Row], new: list[Row], cells: list[Any]) -> list[Row]:
+    """Return a series' rows: the new ones, and the earlier ones at its other resolutions.
+
+    In the order of ``cells`` (the series' resolutions); an earlier row at a
+    resolution the series no longer lists is left out.
+    """
+    ran = {r["cells_across"] for r in new}
+    kept = [r for r in earlier if r.get("cells_across") in cells and r["cells_across"] not in ran]
+    return sorted(kept + new, key=lambda r: cells.index(r["cells_across"]))
 
 
 def _floored_row(row: Row) -> bool:
@@ -615,8 +662,14 @@ def run_suite(
     jobs: Jobs = 2,
     limit: float = 900.0,
     on_row: OnRow = None,
+    values: list[float] | None = None,
 ) -> dict[str, Any]:
-    """Run the suite; write ``suite[-quick].json`` and ``.md`` with plots into ``out_dir``."""
+    """Run the suite; write ``suite[-quick].json`` and ``.md`` with plots into ``out_dir``.
+
+    ``values``: with ``only`` one series (``work-precision/NAME``), run those
+    of its resolutions only, their rows put into the series of the report
+    already in ``out_dir``.
+    """
     from foamsilo.scene import preset_names
 
     names = only or list(ENTRIES)
@@ -638,6 +691,9 @@ def run_suite(
             + "; or one preset: "
             + ", ".join(f"presets/{k}" for k in parts["presets"])
         )
+    if values is not None and (len(split) != 1 or split[0][0] != "work-precision"
+                               or not split[0][1]):  # fmt: skip
+        raise FoamsiloError("--values: needs one series, --only work-precision/NAME")
     stem = "suite-quick" if quick else "suite"
     result: dict[str, Any] = {}
     previous = out_dir / f"{stem}.json"
@@ -666,7 +722,9 @@ def run_suite(
             result[name] = {"rows": [rows[k] for k in sorted(rows)]}
             key = f"{name}/{sub}"
         elif sub:
-            part = work_precision(quick, Path(work_dir) / name, jobs, limit, on_row, series=sub)
+            earlier = (result.get(name) or {}).get(sub)
+            part = work_precision(quick, Path(work_dir) / name, jobs, limit, on_row, series=sub,
+                                  values=values, earlier=earlier)  # fmt: skip
             result[name] = {**(result.get(name) or {}), **part}
             key = f"{name}/{sub}"
         else:
@@ -676,16 +734,32 @@ def run_suite(
             for book in (timing, commits, ran_as, cpu_of):
                 for k in [k for k in book if k.startswith(f"{name}/")]:
                     del book[k]
-        timing[key] = time.perf_counter() - t0
-        commits[key] = git_commit()
-        ran_as[key] = result["jobs"]
-        cpu_of[key] = result["machine"]["cpu"]
+        spent = time.perf_counter() - t0
+        if values is not None:
+            # some rows added: the series' other rows keep where, how and
+            # from which commit they ran
+            timing[key] = timing.get(key, 0.0) + spent
+            commits[key] = _joined(commits.get(key), git_commit())
+            ran_as[key] = _joined(ran_as.get(key), result["jobs"])
+            cpu_of[key] = _joined(cpu_of.get(key), result["machine"]["cpu"])
+        else:
+            timing[key] = spent
+            commits[key] = git_commit()
+            ran_as[key] = result["jobs"]
+            cpu_of[key] = result["machine"]["cpu"]
     result["wall_s"] = timing
     result["commits"] = commits
     result["jobs_by_entry"] = ran_as
     result["cpu_by_entry"] = cpu_of
-    result["commit"] = ", ".join(sorted({str(c) for c in commits.values() if c}))
+    every = {c for v in commits.values() if v for c in str(v).split(", ")}
+    result["commit"] = ", ".join(sorted(every))
     return write_report(result, out_dir, stem)
+
+
+def _joined(*words: str | None) -> str | None:
+    """Return the words joined by ", ", each once, in order (None and repeats left out)."""
+    seen = [w for w in words if w]
+    return ", ".join(dict.fromkeys(p for w in seen for p in w.split(", "))) or None
 
 
 def rewrite_report(quick: bool, out_dir: Path) -> dict[str, Any]:
@@ -909,7 +983,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
     m = result["machine"]
     ran_as = result.get("jobs_by_entry") or {}
     cpu_of = result.get("cpu_by_entry") or {}
-    cpus = set(cpu_of.values()) | {m["cpu"]}
+    # an entry whose rows ran on several machines names each
+    cpus = {c for v in cpu_of.values() if v for c in v.split(", ")} | {m["cpu"]}
     one_cpu = len(cpus) == 1
     cmd = "foamsilo bench validation" + (" --quick" if result["quick"] else "")
 
