@@ -188,8 +188,10 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
             "missed",
             (
                 f"{span}. In the way: no grid is within {level:.0%} of every extrapolation, "
-                f"measured or by the error model (the orders are under the scheme's "
-                f"{FORMAL_ORDER:g}, the extrapolations {spread:.1%} apart)"
+                f"measured or by the error model (the orders "
+                + ", ".join(f"{g.order:.2f}" for g in grids.values())
+                + f" against the scheme's {FORMAL_ORDER:g}, the extrapolations "
+                f"{spread:.1%} apart)"
             ),
         )
     priced = [r for r in found if r.cost is not None]
@@ -205,7 +207,8 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     else:
         verdict = "missed"
         detail += (
-            f". In the way: Q converges at order {g.order:.2f}, under the scheme's "
+            f". In the way: Q converges at order {g.order:.2f}, "
+            f"{'under' if (g.order or 0.0) < FORMAL_ORDER else 'not under'} the scheme's "
             f"{FORMAL_ORDER:g}, so the {level:.0%} grid is {best.cells:.0f} across and costs "
             f"{best.cost / float(t['limit']):.2g} times the target"
         )
