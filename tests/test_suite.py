@@ -544,3 +544,36 @@ def test_rows_of_a_series_are_refused_unless_the_series_lists_them(tmp_path, onl
     with pytest.raises(FoamsiloError, match=match):
         run_suite(False, tmp_path, tmp_path / "work", only=only, values=values)
     assert not any(tmp_path.iterdir())  # refused before anything ran or was written
+
+
+@pytest.mark.openfoam
+def test_one_row_of_a_series_runs_for_real_and_joins_the_others(tmp_path, openfoam, solver):
+    """`--values 36` on Venier Test 2's series: that row runs, at its feeder's rate; the rest stay.
+
+    The cheapest series of the suite (3D, a few seconds a row), its rows as
+    the suite's report holds them. Tolerance: the feeder's rate to 0.1%, as
+    tests/test_feeder.py asks of the preset.
+    """
+    from foamsilo.scene import load_preset
+    from foamsilo.studies.suite import run_suite
+
+    report = json.loads((Path(__file__).parents[1] / "docs/validation/suite.json").read_text())
+    old = {k: report[k] for k in ("machine", "jobs", "commits", "wall_s") if k in report}
+    old["work-precision"] = {"venier-test2": report["work-precision"]["venier-test2"]}
+    before = old["work-precision"]["venier-test2"]["rows"]
+    assert [r["cells_across"] for r in before] == [24, 36, 48, 72]
+    (tmp_path / "suite.json").write_text(json.dumps(old))
+    res = run_suite(False, tmp_path, tmp_path / "work", only=["work-precision/venier-test2"],
+                    jobs=1, values=[36])  # fmt: skip
+    rows = res["work-precision"]["venier-test2"]["rows"]
+    assert [r["cells_across"] for r in rows] == [24, 36, 48, 72]
+    # the row in its place in the series' work directory, the others as they were
+    assert rows[1]["case_dir"] == str(tmp_path / "work/work-precision/venier-test2/01")
+    assert [(r["Q"], r["case_dir"]) for r in rows if r["cells_across"] != 36] == [
+        (r["Q"], r["case_dir"]) for r in before if r["cells_across"] != 36
+    ]
+    scene = load_preset("venier-test2")
+    assert scene.silo.feeder_flow_rate is not None
+    rate = scene.material.density * scene.silo.feeder_flow_rate
+    assert rows[1]["outcome"] == "steady"
+    assert rows[1]["Q"] == pytest.approx(rate, rel=1e-3)
