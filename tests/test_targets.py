@@ -45,7 +45,7 @@ def test_a_cost_target_takes_the_cheapest_series_and_says_what_stands_in_the_way
     wp = {"a": series([8, 16, 32, 64])}
     (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=10.0, names=["a"])]})
     assert (v.verdict, v.value) == ("missed", pytest.approx(1e-3 * 64**2.5))
-    assert "order 1.00" in v.detail and "3.3 times the target" in v.detail
+    assert "order 1.00, under the scheme's 2" in v.detail and "3.3 times the target" in v.detail
     (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=40.0, names=["a"])]})
     assert v.verdict == "met"
 
@@ -153,6 +153,8 @@ def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
     (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=1e6)]})
     assert v.verdict == "missed" and "no grid is within 1% of every extrapolation" in v.detail
     assert "spread 1.5%" in v.detail
+    # the orders as measured, not a fixed phrase
+    assert "(the orders 1.00, 2.00 against the scheme's 2," in v.detail
     near = series([4, 8, 16, 32], p=2.0)
     for r in near["rows"]:
         r["Q"] *= 1.004
