@@ -82,7 +82,15 @@ def test_an_order_above_the_formal_one_is_not_trusted():
     values = series(cells, 3.0)
     g = grid_convergence(cells, values)
     assert g.order == pytest.approx(3.0, rel=1e-9)
-    assert_richardson(g, cells, values, 2.0, 1.25)
+    rp = (56 / 40) ** 2
+    assert g.order_used == 2.0
+    assert g.extrapolated == pytest.approx((rp * values[2] - values[1]) / (rp - 1), rel=1e-12)
+    # the GCI: 1.25 times the three grids' range (Eca & Hoekstra), here wider
+    # than the formal order's index from the finest increment alone
+    at_formal = 1.25 * abs(values[1] / values[2] - 1) / (rp - 1)
+    data_range = 1.25 * (values[2] - values[0]) / values[2]
+    assert data_range > 3 * at_formal
+    assert g.gci == pytest.approx(data_range, rel=1e-12)
     # wider than the n^-3 model's own index, and beyond the true value
     true_gci = 1.25 * abs(values[2] - 0.034) / abs(values[2])
     assert g.gci > 1.5 * true_gci
@@ -93,6 +101,7 @@ def test_an_order_above_the_formal_one_is_not_trusted():
     # an order below the formal one is taken as observed
     lower = grid_convergence(cells, series(cells, 1.2))
     assert lower.order_used == pytest.approx(lower.order, rel=1e-12)
+    assert_richardson(lower, cells, series(cells, 1.2), lower.order, 1.25)
     with pytest.raises(FoamsiloError, match="formal_order"):
         grid_convergence(cells, values, formal_order=0.0)
 
@@ -135,3 +144,15 @@ def test_equal_increments_over_shrinking_ratios_get_no_positive_order():
     g = grid_convergence([30, 36, 40], [0.095362, 0.09619, 0.097009])
     assert g.order is not None and g.order < 0
     assert g.order_used == 1.0 and g.gci > 0.2
+
+
+def test_the_report_says_when_the_gci_is_the_data_range():
+    from foamsilo.studies.suite import _convergence_words
+
+    cells = [28, 40, 56]
+    fast = _convergence_words(grid_convergence(cells, series(cells, 3.0)).as_dict())
+    assert "take p = 2" in fast and "three grids' range" in fast
+    # at the formal order, or under it, the GCI is Roache's alone
+    for p in (2.0, 1.2):
+        words = _convergence_words(grid_convergence(cells, series(cells, p)).as_dict())
+        assert "three grids' range" not in words

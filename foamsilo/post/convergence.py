@@ -21,7 +21,12 @@ extrapolation next to the finest value and shrink the GCI. The extrapolation,
 the GCI and the resolution for a level then take the formal order,
 ``p = min(p_observed, p_formal)`` (Roache 1998, *Verification and Validation
 in Computational Science and Engineering*, sec. 5.9; the observed order is
-still reported).
+still reported). From 0.05 above it (Eca & Hoekstra 2014, below: their
+2.05 for a second-order scheme) the GCI is at least 1.25 times the range of
+the three values, relative to the finest (their uncertainty for such an
+order), because increments that fall faster than the scheme allows say
+that the grids are not in the asymptotic range, where the formal order's
+GCI, computed from the smallest increment alone, would claim the most.
 
 An observed order under 0.5 is not trusted either: the grids are not yet in
 the asymptotic range, and as p falls to 0 the extrapolation runs off to
@@ -55,6 +60,9 @@ LOW_ORDER_SAFETY_FACTOR = 3.0
 #: The scheme's formal order in space (Gauss linear: second order; the code
 #: verification measures it, docs/validation/verification.md)
 FORMAL_ORDER = 2.0
+#: An observed order this far above the formal one takes the data range as its
+#: least GCI (Eca & Hoekstra 2014: 2.05 for a second-order scheme)
+ABOVE_FORMAL = 0.05
 #: The order's bracket: its ends
 _ORDER_EPS = 1e-9
 _ORDER_MAX = 64.0
@@ -79,7 +87,9 @@ class GridConvergence:
         Richardson-extrapolated value (monotone only), with ``order_used``.
     gci : float or None
         Relative uncertainty of the finest value: the fine-grid GCI
-        (monotone), half the relative range of the three finest (oscillatory).
+        (monotone; with an order above the formal one, at least 1.25 times
+        the relative range of the three finest), half the relative range of
+        the three finest (oscillatory).
     error_vs_extrapolated : list of float or None
         ``value / extrapolated - 1`` on each grid.
     orders_by_triple : list of float or None
@@ -228,6 +238,8 @@ def grid_convergence(
     ext = (rp * f1 - f2) / (rp - 1)
     safety = LOW_ORDER_SAFETY_FACTOR if low else SAFETY_FACTOR
     gci = safety * abs(e21 / f1) / (rp - 1)
+    if p >= formal_order + ABOVE_FORMAL:  # not asymptotic: at least the data's own range
+        gci = max(gci, SAFETY_FACTOR * (max(values[-3:]) - min(values[-3:])) / abs(f1))
     errors = [v / ext - 1 for v in values]
     return GridConvergence(
         list(cells), list(values), "monotone", p, ext, gci, errors, triples, used

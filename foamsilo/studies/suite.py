@@ -55,7 +55,12 @@ import numpy as np
 from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.jsonio import dumps
-from foamsilo.post.convergence import LOW_ORDER, LOW_ORDER_SAFETY_FACTOR
+from foamsilo.post.convergence import (
+    ABOVE_FORMAL,
+    LOW_ORDER,
+    LOW_ORDER_SAFETY_FACTOR,
+    SAFETY_FACTOR,
+)
 from foamsilo.studies.cases import (
     Jobs,
     StudyCase,
@@ -907,6 +912,12 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
     if used is not None and used < conv["order"]:
         capped = (
             f", above the scheme's formal order, so the extrapolation and the GCI take p = {used:g}"
+            + (
+                f" and the GCI is at least {SAFETY_FACTOR:g} times the three grids' range "
+                "(Eca & Hoekstra 2014)"
+                if conv["order"] >= used + ABOVE_FORMAL
+                else ""
+            )
         )
     elif used is not None and used > conv["order"]:
         capped = (
