@@ -1051,10 +1051,14 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             about = f" {data['about']}" if data.get("about") else ""
             law = (f"law: {data['law']}, Q = {data['Q_law']:.5g}" if data.get("Q_law")
                    else "no analytic law")  # fmt: skip
+            at = {
+                k: f"{data[k]} across" if data[k] else "no grid"
+                for k in ("recommend_5pct", "recommend_2pct")
+            }
             lines += [
                 f"**{preset}**{about} ({law}); resolution "
-                f"for 5%: {data['recommend_5pct'] or 'none'} across, for 2%: "
-                f"{data['recommend_2pct'] or 'none'} across (against the finest run).",
+                f"for 5%: {at['recommend_5pct']}, for 2%: "
+                f"{at['recommend_2pct']} (against the finest run).",
                 "",
                 "| cells across | cells | Q | Q* | vs finest | vs extrapolated | vs law "
                 "| time error | wall [s] | CPU [s] | steps | recoveries |",
