@@ -68,6 +68,15 @@ _ORDER_EPS = 1e-9
 _ORDER_MAX = 64.0
 
 
+def range_bounds_gci(order: float, formal_order: float = FORMAL_ORDER) -> bool:
+    """Whether an order is far enough above the formal one for the range rule.
+
+    From ``formal_order + ABOVE_FORMAL`` the GCI is at least 1.25 times the
+    three finest values' range (Eca & Hoekstra 2014).
+    """
+    return order >= formal_order + ABOVE_FORMAL
+
+
 @dataclass(frozen=True)
 class GridConvergence:
     """The grid convergence of one scalar over a series of grids.
@@ -238,7 +247,7 @@ def grid_convergence(
     ext = (rp * f1 - f2) / (rp - 1)
     safety = LOW_ORDER_SAFETY_FACTOR if low else SAFETY_FACTOR
     gci = safety * abs(e21 / f1) / (rp - 1)
-    if p >= formal_order + ABOVE_FORMAL:  # not asymptotic: at least the data's own range
+    if range_bounds_gci(p, formal_order):  # not asymptotic: at least the data's own range
         gci = max(gci, SAFETY_FACTOR * (max(values[-3:]) - min(values[-3:])) / abs(f1))
     errors = [v / ext - 1 for v in values]
     return GridConvergence(

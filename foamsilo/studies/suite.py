@@ -56,10 +56,10 @@ from foamsilo.case import write_whole
 from foamsilo.errors import FoamsiloError
 from foamsilo.jsonio import dumps
 from foamsilo.post.convergence import (
-    ABOVE_FORMAL,
     LOW_ORDER,
     LOW_ORDER_SAFETY_FACTOR,
     SAFETY_FACTOR,
+    range_bounds_gci,
 )
 from foamsilo.studies.cases import (
     Jobs,
@@ -915,7 +915,7 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
             + (
                 f" and the GCI is at least {SAFETY_FACTOR:g} times the three grids' range "
                 "(Eca & Hoekstra 2014)"
-                if conv["order"] >= used + ABOVE_FORMAL
+                if range_bounds_gci(conv["order"], used)
                 else ""
             )
         )
