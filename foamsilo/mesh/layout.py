@@ -213,6 +213,44 @@ def coarse_ratio(scene: Scene) -> float:
     return max(1.0, scene.silo.width / scene.mesh.coarse_cells_across / scene.cell_size)
 
 
+def similar_grading(
+    cells_across: int, reference: int, growth_rate: float, coarse_cells_across: int
+) -> tuple[float, int]:
+    """Growth rate and largest cells of a graded mesh refined as a whole.
+
+    A grid convergence study needs grids refined alike everywhere (Roache
+    1998), not only at the orifice: with a fixed growth rate g the cells at a
+    distance x beyond the orifice region are about (g - 1) x wide at every
+    resolution, and the largest ones stay L / ``coarse_cells_across``, so
+    their part of the error does not shrink. Refined by s = ``cells_across``
+    / ``reference`` as a whole, each cell of the reference grid becomes about
+    s cells: the growth rate is g^(1/s) (exactly s cells for one in the limit
+    g -> 1) and the largest cells L / (s ``coarse_cells_across``).
+
+    Parameters
+    ----------
+    cells_across : int
+        Cells across L of the grid wanted.
+    reference : int
+        Cells across L of the grid whose grading is given.
+    growth_rate, coarse_cells_across
+        That grid's ``mesh.growth_rate`` and ``mesh.coarse_cells_across``.
+
+    Returns
+    -------
+    tuple of (float, int)
+        ``mesh.growth_rate`` and ``mesh.coarse_cells_across`` at ``cells_across``.
+
+    Examples
+    --------
+    >>> g, c = similar_grading(144, 72, 1.1, 16)
+    >>> round(g, 4), c
+    (1.0488, 32)
+    """
+    s = cells_across / reference
+    return growth_rate ** (1.0 / s), max(2, round(coarse_cells_across * s))
+
+
 def _graded_rows(scene: Scene) -> list[Row]:
     """Rows of a graded mesh: square cells up to ``mesh.orifice_region`` D, then growing."""
     s, h, me = scene.silo, scene.cell_size, scene.mesh

@@ -106,15 +106,42 @@ class Check:
 def _series(entry: dict[str, Any], quick: bool) -> tuple[list[Any], list[StudyCase]]:
     """Return the values of a series entry and its cases (one per value)."""
     values = pick(entry, "values", quick)
-    sets = overrides(pick(entry, "set", quick))
+    table = pick(entry, "set", quick) or {}
     key = entry["key"]
     short = key.split(".")[-1]
     label = {"cells_across": "{v} across", "orifice_width": "{short} {v:g} m"}.get(short, "{v}")
     cases = [
-        StudyCase(label.format(v=v, short=short), entry["preset"], [f"{key}={v!r}", *sets])
+        StudyCase(
+            label.format(v=v, short=short),
+            entry["preset"],
+            [f"{key}={v!r}", *overrides(_similar(entry, table, v))],
+        )
         for v in values
     ]
     return values, cases
+
+
+def _similar(entry: dict[str, Any], table: dict[str, Any], value: Any) -> dict[str, Any]:
+    """Return a series' overrides at ``value``; with ``similar_to``, its grading refined alike.
+
+    ``similar_to = N0``: the growth rate and largest cells in ``set`` are
+    those of the grid N0 across, and every grid of the series is that one
+    refined as a whole (:func:`foamsilo.mesh.layout.similar_grading`).
+    """
+    if "similar_to" not in entry:
+        return table
+    from foamsilo.mesh.layout import similar_grading
+
+    grading = ("mesh.growth_rate", "mesh.coarse_cells_across")
+    if entry["key"] != "mesh.cells_across" or any(k not in table for k in grading):
+        raise FoamsiloError(
+            f"work-precision/{entry.get('name', entry['preset'])}: similar_to needs "
+            f"key = 'mesh.cells_across' and {' and '.join(grading)} in its set"
+        )
+    growth, coarse = similar_grading(
+        int(value), int(entry["similar_to"]), float(table[grading[0]]), int(table[grading[1]])
+    )
+    return {**table, grading[0]: growth, grading[1]: coarse}
 
 
 # ----------------------------------------------------------- work precision
