@@ -103,6 +103,38 @@ def test_graded_bands_fill_the_span_and_grow_smoothly(growth, span):
     assert max(sizes) <= coarse * h * 1.5
 
 
+def _rows_between(scene, a: float, b: float) -> int:
+    """Rows of cells whose centres lie between heights a and b."""
+    edges = [0.0]
+    for r in vertical_rows(scene):
+        edges += [r.y0 + (r.y1 - r.y0) * f for f in r.heights()]
+    return sum(a <= (y0 + y1) / 2 < b for y0, y1 in zip(edges, edges[1:], strict=False))
+
+
+def test_a_graded_mesh_refined_as_a_whole_refines_beyond_the_orifice_region():
+    from foamsilo.mesh.layout import similar_grading
+
+    fixed = ["mesh.growth_rate=1.1", "mesh.coarse_cells_across=16"]
+    base = load_preset("zhou-cyl-bottom", ["mesh.cells_across=72", *fixed])
+    for n in (144, 216):
+        g, c = similar_grading(n, 72, 1.1, 16)
+        alike = load_preset("zhou-cyl-bottom", [f"mesh.cells_across={n}",
+                            f"mesh.growth_rate={g!r}", f"mesh.coarse_cells_across={c}"])  # fmt: skip
+        kept = load_preset("zhou-cyl-bottom", [f"mesh.cells_across={n}", *fixed])
+        s = n / 72
+        # in the orifice region (up to 1 D = 0.01 m), the growth (1-3 D) and
+        # the column above: s times the rows of the 72-across grid, to a cell
+        # or two at each band's ends
+        for a, b in [(0.0, 0.01), (0.01, 0.03), (0.03, 0.1), (0.1, 0.54)]:
+            assert _rows_between(alike, a, b) / _rows_between(base, a, b) == pytest.approx(
+                s, rel=0.1
+            )
+        # the growth rate and the largest cells kept: 3-10 D above the floor
+        # the grid is not refined at all
+        assert _rows_between(kept, 0.03, 0.1) <= _rows_between(base, 0.03, 0.1) + 1
+        assert _rows_between(kept, 0.1, 0.54) <= _rows_between(base, 0.1, 0.54)
+
+
 def test_a_graded_profile_keeps_the_orifice_cells_and_spends_fewer_elsewhere():
     for preset in ("zhou-planar", "zhou-cyl-bottom"):
         uniform = profile_layout(load_preset(preset, ["mesh.cells_across=72"]))

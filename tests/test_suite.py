@@ -546,6 +546,23 @@ def test_rows_of_a_series_are_refused_unless_the_series_lists_them(tmp_path, onl
     assert not any(tmp_path.iterdir())  # refused before anything ran or was written
 
 
+def test_a_series_refined_as_a_whole_scales_its_grading_with_the_cells():
+    from foamsilo.studies.suite import _series
+
+    entry = {"name": "s", "preset": "zhou-cyl-bottom", "key": "mesh.cells_across",
+             "values": [72, 144], "similar_to": 72,
+             "set": {"mesh.growth_rate": 1.1, "mesh.coarse_cells_across": 16}}  # fmt: skip
+    _, cases = _series(entry, False)
+    assert cases[0].sets == ["mesh.cells_across=72", "mesh.growth_rate=1.1",
+                             "mesh.coarse_cells_across=16"]  # fmt: skip
+    growth = float(cases[1].sets[1].split("=")[1])
+    assert growth == pytest.approx(1.1**0.5, rel=1e-12)  # two cells where there was one
+    assert cases[1].sets[2] == "mesh.coarse_cells_across=32"
+    del entry["set"]["mesh.coarse_cells_across"]
+    with pytest.raises(FoamsiloError, match="similar_to needs .*mesh.coarse_cells_across"):
+        _series(entry, False)
+
+
 @pytest.mark.openfoam
 def test_one_row_of_a_series_runs_for_real_and_joins_the_others(tmp_path, openfoam, solver):
     """`--values 36` on Venier Test 2's series: that row runs, at its feeder's rate; the rest stay.
