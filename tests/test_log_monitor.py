@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import math
 
 import pytest
@@ -51,6 +52,26 @@ def test_steps_are_tabulated(tmp_path):
     mon.write_table(tmp_path / "steps.csv")
     rows = (tmp_path / "steps.csv").read_text().splitlines()
     assert len(rows) == 31 and rows[0].startswith("time,delta_t,courant")
+
+
+OUTER = "Outer iteration {k}: grains' velocity change rms {rms} m/s, largest {big} of the fastest grain's speed"
+
+
+def test_each_outer_iteration_s_change_is_tabulated(tmp_path):
+    # siloFoam's line, as it prints it, after each outer iteration's pressure solve
+    mon = LogMonitor(0.5, 0.5, 0.0)
+    feed_steps(mon, 2)
+    for k, rms in enumerate([6.7e-05, 3.9e-05, 2.2e-05], start=1):
+        mon.feed(OUTER.format(k=k, rms=rms, big=0.006))
+    assert mon.steps[0].outer_changes == []
+    assert mon.steps[-1].outer_changes == [6.7e-05, 3.9e-05, 2.2e-05]
+    mon.write_table(tmp_path / "steps.csv")
+    with open(tmp_path / "steps.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert rows[0]["outer_iterations"] == "" and rows[0]["outer_change_last"] == ""
+    assert rows[1]["outer_iterations"] == "3"
+    assert float(rows[1]["outer_change_first"]) == 6.7e-05
+    assert float(rows[1]["outer_change_last"]) == 2.2e-05
 
 
 def test_nan_residual_is_divergence():

@@ -300,6 +300,12 @@ def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(
     kept = [(float(r["time"]), float(r["delta_t"])) for r in rows]
     for t0 in starts:
         assert any(abs(t - dt - t0) < 1e-7 * t for t, dt in kept), t0
+    # each kept step's outer iterations, as the log gives them: the scene's
+    # three, twelve in the steps kept at half the share
+    passes = [int(r["outer_iterations"]) for r in rows]
+    assert set(passes) == {3, 12}
+    assert passes.count(12) == len([r for r in share if "failed" not in r])
+    assert all(float(r["outer_change_last"]) > 0 for r in rows)
 
 
 def test_a_step_that_fails_at_half_the_share_is_taken_as_the_whole_share_took_it(tmp_path, solver):

@@ -2,7 +2,9 @@
 
 :class:`LogMonitor` keeps, for each time step, the time, the step, the
 Courant numbers, the initial residuals and iteration counts, the continuity
-error and the execution time, and decides whether the run diverged:
+error, each outer iteration's change of the grains' velocity (whether the
+iterations converge) and the execution time, and decides whether the run
+diverged:
 
 * a NaN or Inf in a residual, a Courant number or the time step;
 * a Courant number far above its limit (``COURANT_BLOWUP`` times);
@@ -85,6 +87,15 @@ _RE_SHARE_FALLBACK = re.compile(
 _RE_RETAKE_CHECK = re.compile(
     r"^Step retaken for a check: in the step from t = " + _FLOAT + r" with deltaT = " + _FLOAT
 )
+#: one outer iteration's change of the grains' velocity (rms, m/s, and the
+#: largest over the fastest grain's speed): whether the iterations converge
+_RE_OUTER = re.compile(
+    r"^Outer iteration (\d+): grains' velocity change rms "
+    + _FLOAT
+    + r" m/s, largest "
+    + _FLOAT
+    + r" of the fastest grain's speed"
+)
 _RE_STEP_DIVERGED = re.compile(r"^Step diverged: (volume fraction|Courant number) (.*)$")
 _RE_STEP_FROM = re.compile(r"in the step from t = " + _FLOAT)
 _RE_ALPHA = re.compile(
@@ -134,6 +145,8 @@ class Step:
     iterations: dict[str, int] = field(default_factory=dict)
     continuity: float = math.nan
     execution_time: float = math.nan
+    #: each outer iteration's rms change of the grains' velocity [m/s]
+    outer_changes: list[float] = field(default_factory=list)
 
 
 @dataclass
@@ -290,6 +303,10 @@ class LogMonitor:
             if _isbad(r0) or _isbad(float(m.group(3))):
                 self._diverge(f"{name} residual", f"{name} residual is {r0}")
             return
+        m = _RE_OUTER.match(line)
+        if m:
+            step.outer_changes.append(float(m.group(2)))
+            return
         m = _RE_ALPHA.match(line)
         if m:
             # no verdict here: the solver judges the step and takes it again
@@ -372,6 +389,9 @@ class LogMonitor:
                     "granular_courant",
                     "continuity",
                     "execution_time",
+                    "outer_iterations",
+                    "outer_change_first",
+                    "outer_change_last",
                 ]
                 + [f"res_{n}" for n in names]
                 + [f"iter_{n}" for n in names]
@@ -386,6 +406,9 @@ class LogMonitor:
                         s.granular_courant,
                         s.continuity,
                         s.execution_time,
+                        len(s.outer_changes) or "",
+                        s.outer_changes[0] if s.outer_changes else "",
+                        s.outer_changes[-1] if s.outer_changes else "",
                     ]
                     + [s.residuals.get(n, "") for n in names]
                     + [s.iterations.get(n, "") for n in names]

@@ -207,8 +207,15 @@ int main(int argc, char *argv[])
                     continue;
                 }
 
+                // Each outer iteration's change of the grains' velocity: the
+                // retake criteria use it and the log shows whether the
+                // iterations converge (docs/solver.md)
                 autoPtr<volVectorField> UOuterStart;
-                if (outerGrowthLimit > 0 || outerChangeLimit > 0)
+                if
+                (
+                    outerGrowthLimit > 0 || outerChangeLimit > 0
+                 || pimple.nCorrPIMPLE() > 1
+                )
                 {
                     UOuterStart.reset(new volVectorField("UOuterStart", U));
                 }
@@ -276,6 +283,11 @@ int main(int argc, char *argv[])
                         gMax(grains*mag(dU))
                        /max(gMax(grains*mag(U.primitiveField())), VSMALL)
                     );
+                    Info<< "Outer iteration " << pimple.corr()
+                        << ": grains' velocity change rms "
+                        << outerChange.last() << " m/s, largest "
+                        << outerMaxChange.last()
+                        << " of the fastest grain's speed" << endl;
                 }
             }
 
