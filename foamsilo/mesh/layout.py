@@ -190,22 +190,47 @@ def toward_edge(bands: list[tuple[float, int, float]]) -> list[tuple[float, int,
     return [(span, n, 1.0 / r) for span, n, r in reversed(bands)]
 
 
-def edge_region(scene: Scene) -> float:
-    """Width [m] of the orifice region beside each orifice edge (graded meshes).
+def edge_region(scene: Scene, room: float | None = None, k: float | None = None) -> float:
+    """Width [m] of the orifice region beside an orifice edge (graded meshes).
 
     ``mesh.orifice_region`` D in whole cells, widened to hold the whole growth
-    from the edge's refined cells (``mesh.orifice_edge_refinement``) to the
-    orifice's cells, never past the wall.
+    from the edge's refined cells (h / ``k``, default
+    ``mesh.orifice_edge_refinement``) to the orifice's cells, never past the
+    wall: ``room`` [m] is the distance from the edge to the wall it faces
+    (default: a centred bottom orifice's edge to the side wall).
     """
     s, h, me = scene.silo, scene.cell_size, scene.mesh
-    R, r_o = s.width / 2, s.orifice_width / 2
+    if room is None:
+        room = (s.width - s.orifice_width) / 2
+    if k is None:
+        k = me.orifice_edge_refinement
     region = max(h, round(me.orifice_region * s.orifice_width / h) * h)
     # the growing band as edge_bands lays it out in a span long enough for it
-    bands = edge_bands(10 * R, h, me.orifice_edge_refinement, me.growth_rate)
+    bands = edge_bands(10 * (s.width / 2), h, k, me.growth_rate)
     if len(bands) > 1 and region < bands[0][0] + h:  # too short for the growth
         region = bands[0][0]
     # a sliver left by the wall would be a cell much narrower than its neighbour
-    return R - r_o if R - r_o - region < 1.5 * h else region
+    return room if room - region < 1.5 * h else region
+
+
+def away_from_edge(
+    scene: Scene, room: float, coarse: float, k: float | None = None
+) -> list[tuple[float, int, float]]:
+    """Bands from an orifice edge across ``room`` [m] to the wall it faces, fine end first.
+
+    The orifice region (:func:`edge_region`, cells widening from the edge's
+    refined ones, h / ``k``, to h), then cells growing by the growth rate up
+    to ``coarse`` x h (:func:`graded_segments`). ``k`` defaults to
+    ``mesh.orifice_edge_refinement``; 1 leaves the region cells of h.
+    """
+    h, me = scene.cell_size, scene.mesh
+    if k is None:
+        k = me.orifice_edge_refinement
+    region = edge_region(scene, room, k)
+    bands = edge_bands(region, h, k, me.growth_rate)
+    if room - region > 1e-9 * room:
+        bands += graded_segments(room - region, h, me.growth_rate, coarse)
+    return bands
 
 
 def coarse_ratio(scene: Scene) -> float:
@@ -254,6 +279,8 @@ def similar_grading(
 def _graded_rows(scene: Scene) -> list[Row]:
     """Rows of a graded mesh: square cells up to ``mesh.orifice_region`` D, then growing."""
     s, h, me = scene.silo, scene.cell_size, scene.mesh
+    if s.orifice_position == "lateral":
+        return _lateral_graded_rows(scene)
     y_f = min(s.height, max(h, round(me.orifice_region * s.orifice_width / h) * h))
     rows = [Row(0.0, y_f, max(1, round(y_f / h)))]
     headspace = (s.height - s.fill_height) / (HEADSPACE_CELLS * h)
@@ -264,6 +291,36 @@ def _graded_rows(scene: Scene) -> list[Row]:
         if span > 1e-12 * s.height:
             rows.append(Row(y, y + span, n, r))
         y += span
+    return rows
+
+
+def _lateral_graded_rows(scene: Scene) -> list[Row]:
+    """Rows of a graded mesh beside a lateral orifice, from the floor to the top.
+
+    Rows narrow towards each of the orifice's edges from both sides (to h /
+    ``mesh.orifice_edge_refinement``, as a bottom orifice's columns do), the
+    orifice's rows are cells of h between them, and away from the orifice
+    (down to the floor, up to the top) each side has its orifice region and
+    then cells growing by the growth rate, the top's capped by the headspace.
+    """
+    s, h, me = scene.silo, scene.cell_size, scene.mesh
+    assert s.orifice_height is not None
+    lo, hi = s.orifice_height, s.orifice_height + s.orifice_width
+    headspace = (s.height - s.fill_height) / (HEADSPACE_CELLS * h)
+    below = toward_edge(away_from_edge(scene, lo, coarse_ratio(scene))) if lo > 1e-12 else []
+    if me.orifice_edge_refinement > 1.0 + 1e-12:  # narrowing to both edges
+        half = edge_bands(s.orifice_width / 2, h, me.orifice_edge_refinement, me.growth_rate)
+        orifice = half + toward_edge(half)
+    else:
+        orifice = [(s.orifice_width, max(1, round(s.orifice_width / h)), 1.0)]
+    top = max(1.0, min(coarse_ratio(scene), headspace))
+    above = away_from_edge(scene, s.height - hi, top) if s.height - hi > 1e-12 else []
+    rows, y = [], 0.0
+    for bands, end in ((below, lo), (orifice, hi), (above, s.height)):
+        for i, (span, n, r) in enumerate(bands):
+            y1 = end if i == len(bands) - 1 else y + span  # the edges exactly
+            rows.append(Row(y, y1, n, r))
+            y = y1
     return rows
 
 
@@ -411,14 +468,25 @@ def _graded_columns(
     each column's growth of the cell width towards +x.
     """
     s, h, me = scene.silo, scene.cell_size, scene.mesh
+    if s.orifice_position == "lateral":
+        # the orifice in the right wall: the columns are not refined towards
+        # it (its edges are, by the rows), as a bottom orifice's rows are not
+        bands = toward_edge(away_from_edge(scene, s.width, coarse_ratio(scene), k=1.0))
+        xs = [0.0]
+        for span, _, _ in bands:
+            xs.append(xs[-1] + span)
+        xs[-1] = s.width
+        return (
+            [(x, 0.0) for x in xs],
+            [n for _, n, _ in bands],
+            [WALLS] * len(bands),
+            [r for _, _, r in bands],
+        )
     R, r_o = s.width / 2, s.orifice_width / 2
     k = me.orifice_edge_refinement
     # from the orifice's edge to the wall: the orifice region (widening from the
     # edge's refined cells), then growth
-    region = edge_region(scene)
-    outward = edge_bands(region, h, k, me.growth_rate)
-    if R - r_o - region > 1e-9 * R:
-        outward += graded_segments(R - r_o - region, h, me.growth_rate, coarse_ratio(scene))
+    outward = away_from_edge(scene, R - r_o, coarse_ratio(scene))
     # from the orifice's edge inward: the orifice's cells widen towards its centre
     if k <= 1.0 + 1e-12:  # unrefined: the orifice is one column of cells of h
         n_o = max(1, round(r_o / h)) if scene.representation == "axisymmetric" else None

@@ -77,16 +77,20 @@ def validate(scene: Scene) -> None:
         )
     centred_bottom = s.orifice_position == "bottom" and s.eccentricity == 0.0
     if me.graded and not (
-        centred_bottom
-        and (
-            (scene.representation in ("planar", "axisymmetric") and s.shape != "hopper")
-            or (scene.representation == "3d" and s.shape == "cylindrical")
+        (
+            centred_bottom
+            and (
+                (scene.representation in ("planar", "axisymmetric") and s.shape != "hopper")
+                or (scene.representation == "3d" and s.shape == "cylindrical")
+            )
         )
+        or (s.orifice_position == "lateral" and scene.representation == "planar")
     ):
         raise SceneError(
             "mesh.growth_rate",
             f"got {me.growth_rate:g}: graded meshes are built for flat-bottomed silos with a "
-            "centred bottom orifice, planar, axisymmetric or 3D cylinders (this scene: "
+            "centred bottom orifice, planar, axisymmetric or 3D cylinders, and for planar "
+            "silos with a lateral orifice (this scene: "
             f"{scene.representation}, {s.shape}, {s.orifice_position} orifice"
             f"{', off centre' if s.eccentricity else ''}); allowed here: 1 (uniform)",
         )
@@ -94,8 +98,7 @@ def validate(scene: Scene) -> None:
         raise SceneError(
             "mesh.orifice_edge_refinement",
             f"got {me.orifice_edge_refinement:g}: the orifice's edges are refined on graded "
-            "meshes (mesh.growth_rate > 1, flat-bottomed silos with a centred bottom orifice; "
-            "this scene: "
+            "meshes (mesh.growth_rate > 1, which names where they are built; this scene: "
             f"{scene.representation}, growth rate {me.growth_rate:g}); allowed here: 1",
         )
     if me.fine_height is not None and me.fine_height >= s.height:
