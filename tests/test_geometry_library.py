@@ -300,6 +300,43 @@ def test_an_orifice_edge_refined_mesh_passes_checkmesh(preset, tmp_path, openfoa
 
 
 @pytest.mark.openfoam
+def test_a_graded_lateral_orifice_mesh_passes_checkmesh_with_its_edges_refined(tmp_path, openfoam):
+    from foamsilo.case import create_case
+
+    scene = load_preset(
+        "zhou-rect-lateral",
+        ["mesh.cells_across=48", "mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=4"],
+    )
+    m = create_case(scene, tmp_path / "lateral", openfoam).mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.cells == cells_estimate(scene)
+    assert set(m.check.cell_types) == {"hexahedra"}
+    assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=3e-3)
+    # the orifice's wall (x = L) from the msh nodes: the rows narrow to h / 4
+    # at both edges, the cells along the far wall are coarser than h
+    import gmsh
+
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(str(m.msh_file))
+        _, xyz, _ = gmsh.model.mesh.getNodes()
+    finally:
+        gmsh.finalize()
+    p = np.asarray(xyz).reshape(-1, 3)
+    s, h = scene.silo, scene.cell_size
+    wall = np.unique(np.round(p[np.abs(p[:, 0] - s.width) < 1e-12][:, 1], 12))
+    hs = np.diff(wall)
+    for e in (s.orifice_height, s.orifice_height + s.orifice_width):
+        i = int(np.argmin(np.abs(wall - e)))
+        assert wall[i] == pytest.approx(e, abs=1e-9)
+        assert hs[i - 1] == pytest.approx(h / 4, rel=0.05)
+        assert hs[i] == pytest.approx(h / 4, rel=0.05)
+    floor = np.diff(np.unique(np.round(p[np.abs(p[:, 1]) < 1e-12][:, 0], 12)))
+    assert floor[-1] == pytest.approx(h, rel=1e-6) and floor.max() > 2 * h
+
+
+@pytest.mark.openfoam
 def test_an_orifice_edge_refined_3d_ogrid_passes_checkmesh(tmp_path, openfoam):
     from foamsilo.case import create_case
     from foamsilo.mesh.layout import ogrid_for

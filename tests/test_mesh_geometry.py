@@ -201,6 +201,64 @@ def test_the_orifice_edge_columns_narrow_smoothly_to_h_over_k(preset, n, k):
     assert lay.n_cells == sum(lay.columns) * sum(r.n for r in lay.rows)
 
 
+@pytest.mark.parametrize("n", [24, 32, 48, 96, 128, 192])
+@pytest.mark.parametrize("k", [1.0, 4.0])
+def test_a_lateral_orifice_s_rows_narrow_to_its_edges_and_the_columns_grow_from_it(n, k):
+    scene = load_preset(
+        "zhou-rect-lateral",
+        [f"mesh.cells_across={n}", "mesh.growth_rate=1.1", f"mesh.orifice_edge_refinement={k}"],
+    )
+    lay = profile_layout(scene)
+    h, s = scene.cell_size, scene.silo
+    lo, hi = s.orifice_height, s.orifice_height + s.orifice_width
+    # the rows' heights from the floor to the top, and the right wall's patches
+    heights, right = [], []
+    for row, b in zip(lay.rows, [b for b in lay.blocks if b.sides[1] is not None], strict=True):
+        w = [row.ratio**j for j in range(row.n)]
+        heights += [(row.y1 - row.y0) * c / sum(w) for c in w]
+        right += [b.sides[1]] * row.n
+    y = np.concatenate([[0.0], np.cumsum(heights)])
+    assert y[-1] == pytest.approx(s.height, rel=1e-12)
+    # the orifice patch is the orifice, exactly
+    on = [i for i, side in enumerate(right) if side == "orifice"]
+    assert on == list(range(on[0], on[-1] + 1))
+    assert y[on[0]] == pytest.approx(lo, abs=1e-12) and y[on[-1] + 1] == pytest.approx(hi)
+    # the rows touching each edge, above and below it, are h / k high (to the
+    # few % that fit the band); none is lower, none in the orifice higher than h
+    # (unrefined, the orifice is whole cells of about h: half a cell in D / h)
+    hs = np.array(heights)
+    tol = 0.05 if k > 1 else 0.5 * h / s.orifice_width
+    for e in (lo, hi):
+        i = int(np.argmin(np.abs(y - e)))
+        for c in (hs[i - 1], hs[i]):
+            assert c == pytest.approx(h / k, rel=tol)
+    assert hs.min() >= h / k * (1 - tol)
+    assert max(hs[on]) <= h * (1 + tol)
+    # smooth: within 1.3x from row to row, by at most the growth rate within a band
+    steps = hs[1:] / hs[:-1]
+    assert np.all(np.maximum(steps, 1 / steps) <= 1.3)
+    # the columns are h wide at the orifice's wall and grow by at most the
+    # growth rate towards the far wall, up to about L / coarse_cells_across
+    # (the rest after the growth is whole cells of about that size)
+    widths = []
+    for b in lay.blocks[: len(lay.columns)]:
+        (x0, _), (x1, _) = b.corners[0], b.corners[1]
+        w = [b.x_ratio**j for j in range(b.cells[0])]
+        widths += [(x1 - x0) * c / sum(w) for c in w]
+    ws = np.array(widths[::-1])  # from the orifice's wall
+    assert sum(ws) == pytest.approx(s.width, rel=1e-12)
+    d = round(s.orifice_width / h)  # the orifice region: one D of cells of h
+    assert ws[:d] == pytest.approx(np.full(d, h), rel=1e-9)
+    grow = ws[1:] / ws[:-1]
+    assert np.all(np.maximum(grow, 1 / grow) <= 1.3)
+    assert ws.max() <= 1.5 * s.width / scene.mesh.coarse_cells_across
+    # and on fine grids it spends far fewer cells than the uniform mesh
+    assert lay.n_cells == sum(lay.columns) * sum(r.n for r in lay.rows)
+    if n >= 96:
+        uniform = profile_layout(load_preset("zhou-rect-lateral", [f"mesh.cells_across={n}"]))
+        assert lay.n_cells < 0.3 * uniform.n_cells
+
+
 def test_the_orifice_edge_is_refined_only_on_graded_meshes():
     from foamsilo.errors import SceneError
 

@@ -333,7 +333,8 @@ def vertical_rows(scene: Scene) -> list[Row]:
     (capped so that the headspace above the fill keeps two cells). A graded
     mesh (``mesh.growth_rate`` > 1) has square cells up to
     ``mesh.orifice_region`` orifice widths, then cells growing by the growth
-    rate up to the largest cells (``mesh.coarse_cells_across``).
+    rate up to the largest cells (``mesh.coarse_cells_across``); beside a
+    lateral orifice the same on both sides of it (:func:`_lateral_graded_rows`).
     """
     if scene.mesh.graded:
         return _graded_rows(scene)
@@ -464,8 +465,10 @@ def _graded_columns(
 ) -> tuple[list[tuple[float, float]], list[int], list[Side], list[float]]:
     """Columns of a graded profile: the orifice, its region, then cells growing to the wall.
 
-    Returns the edges, cells and bottom patches as :func:`profile_columns`, and
-    each column's growth of the cell width towards +x.
+    Beside a lateral orifice (in the right wall) the columns are cells of h
+    across the orifice region, then grow towards the left wall. Returns the
+    edges, cells and bottom patches as :func:`profile_columns`, and each
+    column's growth of the cell width towards +x.
     """
     s, h, me = scene.silo, scene.cell_size, scene.mesh
     if s.orifice_position == "lateral":

@@ -374,7 +374,7 @@ class Mesh:
     )
     growth_rate: float = _f(
         "graded mesh: largest size ratio of neighbouring cells away from the orifice region "
-        "(1: uniform cells of L / cells_across; planar and axisymmetric bottom orifices)",
+        "(1: uniform cells of L / cells_across; centred bottom orifices, planar lateral ones)",
         "",
         ge=1,
         le=1.5,
@@ -382,14 +382,15 @@ class Mesh:
     )
     orifice_region: float = _f(
         "graded mesh: cells of the orifice's size reach this many orifice widths D beyond "
-        "the orifice's edges and above the floor",
+        "the orifice's edges and above the floor (a lateral orifice: above and below it)",
         "",
         ge=0.25,
         le=10,
         default=1.0,
     )
     orifice_edge_refinement: float = _f(
-        "graded mesh: the columns (3D: the radial cells) at the orifice's edges are this many "
+        "graded mesh: the columns (3D: the radial cells; a lateral orifice: the rows) at the "
+        "orifice's edges are this many "
         "times narrower than the orifice's cells, and widen by at most growth_rate per cell "
         "to them on both sides (the flow turns round the edge; 1: no refinement)",
         "",
