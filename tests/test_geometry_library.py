@@ -194,7 +194,8 @@ def test_every_preset_meshes_and_passes_checkmesh(preset, rep, tmp_path, openfoa
             pytest.skip("auto is already 3D")
         if base.silo.shape == "rectangular":
             sets += ["material.wall_friction=", "gas.mode='open-top'", "gas.q_air_lpm=",
-                     "gas.q_air_scaled=", "silo.thickness=0.01"]  # fmt: skip
+                     "gas.q_air_scaled=", "silo.thickness=0.01",
+                     "mesh.growth_rate=1", "mesh.orifice_edge_refinement=1"]  # fmt: skip
         sets.append("mesh.representation='3d'")
     scene = load_preset(preset, sets)
     case = create_case(scene, tmp_path / preset, openfoam)

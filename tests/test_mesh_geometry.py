@@ -72,8 +72,13 @@ def test_wedge_axis_and_lateral_orifice_sides():
     wedge = profile_layout(load_preset("zhou-cyl-bottom", ["mesh.cells_across=24"]))
     assert {b.sides[3] for b in wedge.blocks if b.corners[0][0] == 0.0} == {"axis"}
     lateral = profile_layout(load_preset("zhou-rect-lateral"))
-    right = [(b.corners[1][1], b.corners[2][1], b.sides[1]) for b in lateral.blocks]
     s = load_preset("zhou-rect-lateral").silo
+    right = [
+        (b.corners[1][1], b.corners[2][1], b.sides[1])
+        for b in lateral.blocks
+        if b.corners[1][0] == pytest.approx(s.width)  # the right wall's column
+    ]
+    assert len(right) == len(lateral.rows)
     for y0, y1, side in right:
         inside = y0 >= s.orifice_height - 1e-12 and y1 <= s.orifice_height + s.orifice_width + 1e-12
         assert side == ("orifice" if inside else "walls")
@@ -255,7 +260,8 @@ def test_a_lateral_orifice_s_rows_narrow_to_its_edges_and_the_columns_grow_from_
     # and on fine grids it spends far fewer cells than the uniform mesh
     assert lay.n_cells == sum(lay.columns) * sum(r.n for r in lay.rows)
     if n >= 96:
-        uniform = profile_layout(load_preset("zhou-rect-lateral", [f"mesh.cells_across={n}"]))
+        flat = [f"mesh.cells_across={n}", "mesh.growth_rate=1", "mesh.orifice_edge_refinement=1"]
+        uniform = profile_layout(load_preset("zhou-rect-lateral", flat))
         assert lay.n_cells < 0.3 * uniform.n_cells
 
 
