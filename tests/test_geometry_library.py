@@ -217,8 +217,8 @@ def test_every_preset_meshes_and_passes_checkmesh(preset, rep, tmp_path, openfoa
     assert area == pytest.approx(_orifice_area(scene), rel=tol)
 
 
-def _floor_spacing(msh, planar: bool) -> np.ndarray:
-    """Widths of the floor's cells along the radius (x of a planar mesh), from the msh nodes."""
+def _msh_nodes(msh) -> np.ndarray:
+    """The (x, y, z) of every node of a gmsh mesh file."""
     import gmsh
 
     gmsh.initialize(interruptible=False)
@@ -228,7 +228,12 @@ def _floor_spacing(msh, planar: bool) -> np.ndarray:
         _, xyz, _ = gmsh.model.mesh.getNodes()
     finally:
         gmsh.finalize()
-    p = np.asarray(xyz).reshape(-1, 3)
+    return np.asarray(xyz).reshape(-1, 3)
+
+
+def _floor_spacing(msh, planar: bool) -> np.ndarray:
+    """Widths of the floor's cells along the radius (x of a planar mesh), from the msh nodes."""
+    p = _msh_nodes(msh)
     floor = p[np.abs(p[:, 1]) < 1e-12]
     r = floor[:, 0] if planar else np.hypot(floor[:, 0], floor[:, 2])
     edges = np.unique(np.round(r, 12))
@@ -315,16 +320,7 @@ def test_a_graded_lateral_orifice_mesh_passes_checkmesh_with_its_edges_refined(t
     assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=3e-3)
     # the orifice's wall (x = L) from the msh nodes: the rows narrow to h / 4
     # at both edges, the cells along the far wall are coarser than h
-    import gmsh
-
-    gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.open(str(m.msh_file))
-        _, xyz, _ = gmsh.model.mesh.getNodes()
-    finally:
-        gmsh.finalize()
-    p = np.asarray(xyz).reshape(-1, 3)
+    p = _msh_nodes(m.msh_file)
     s, h = scene.silo, scene.cell_size
     wall = np.unique(np.round(p[np.abs(p[:, 0] - s.width) < 1e-12][:, 1], 12))
     hs = np.diff(wall)
