@@ -249,8 +249,16 @@ def test_a_graded_mesh_passes_checkmesh_and_grows_at_its_rate(preset, rep, tmp_p
     from foamsilo.case import create_case
 
     n = 24 if rep == "3d" else 48
+    # the mesh keys' defaults but the growth (the planar preset's own grading differs)
+    grading = ["mesh.orifice_region=1.0", "mesh.orifice_edge_refinement=1.0"]
     scene = load_preset(
-        preset, [f"mesh.cells_across={n}", "mesh.growth_rate=1.1", f"mesh.representation='{rep}'"]
+        preset,
+        [
+            f"mesh.cells_across={n}",
+            "mesh.growth_rate=1.1",
+            *grading,
+            f"mesh.representation='{rep}'",
+        ],
     )
     m = create_case(scene, tmp_path / preset, openfoam).mesh
     assert m is not None and m.check.ok, m and m.check.failed_checks

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import pytest
 
+from .conftest import PLANAR_UNIFORM_ARGS
+
 pytestmark = pytest.mark.openfoam
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -46,7 +48,7 @@ def test_a_plain_install_runs_a_preset_from_another_directory(tmp_path, solver):
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     run = subprocess.run(
         [str(venv / "bin" / "foamsilo"), "run", "zhou-planar", "-o", "case", "--json",
-         "--set", "mesh.cells_across=16", "--set", "run.end_time=0.3",
+         "--set", "mesh.cells_across=16", *PLANAR_UNIFORM_ARGS, "--set", "run.end_time=0.3",
          "--set", "run.write_interval=0.15"],
         capture_output=True, text=True, cwd=away, env=env,
     )  # fmt: skip

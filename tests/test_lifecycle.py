@@ -23,7 +23,9 @@ import pytest
 
 from foamsilo.cli import main
 
-PLANAR_16 = ["mesh.cells_across=16", "run.end_time=0.5", "run.write_interval=0.25"]
+from .conftest import PLANAR_UNIFORM
+
+PLANAR_16 = ["mesh.cells_across=16", *PLANAR_UNIFORM, "run.end_time=0.5", "run.write_interval=0.25"]
 
 
 def cli(*args: str) -> tuple[int, dict]:

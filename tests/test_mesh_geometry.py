@@ -8,8 +8,18 @@ import pytest
 from foamsilo.mesh import profile_layout, slot_divisions, top_cell_ratio, vertical_rows
 from foamsilo.scene import load_preset
 
+#: The mesh keys' defaults: a uniform mesh (the planar preset is graded since issue 18)
+UNIFORM = {
+    "mesh.growth_rate": 1.0,
+    "mesh.orifice_edge_refinement": 1.0,
+    "mesh.orifice_region": 1.0,
+    "mesh.coarse_cells_across": 16,
+}
+
 
 def planar(n: int, **sets: object):
+    """The planar silo at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
+    sets = {**UNIFORM, **sets}
     return load_preset(
         "zhou-planar", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
     )
@@ -141,11 +151,11 @@ def test_a_graded_mesh_refined_as_a_whole_refines_beyond_the_orifice_region():
 
 
 def test_a_graded_profile_keeps_the_orifice_cells_and_spends_fewer_elsewhere():
-    for preset in ("zhou-planar", "zhou-cyl-bottom"):
-        uniform = profile_layout(load_preset(preset, ["mesh.cells_across=72"]))
-        graded = profile_layout(
-            load_preset(preset, ["mesh.cells_across=72", "mesh.growth_rate=1.1"])
-        )
+    lab = [load_preset("zhou-cyl-bottom", ["mesh.cells_across=72", f"mesh.growth_rate={g}"])
+           for g in (1.0, 1.1)]  # fmt: skip
+    for uniform_scene, graded_scene in ((planar(72), planar(72, **{"mesh.growth_rate": 1.1})), lab):
+        uniform = profile_layout(uniform_scene)
+        graded = profile_layout(graded_scene)
         orifice = [b.cells[0] for b in graded.blocks if b.sides[0] == "orifice"]
         assert orifice == [b.cells[0] for b in uniform.blocks if b.sides[0] == "orifice"]
         assert graded.n_cells < 0.6 * uniform.n_cells

@@ -31,9 +31,11 @@ from foamsilo.cli import main
 from foamsilo.foam import dict_value
 from foamsilo.scene import load_preset, load_scene_file
 
+from .conftest import PLANAR_UNIFORM
+
 pytestmark = pytest.mark.openfoam
 
-PLANAR_16 = ["mesh.cells_across=16", "run.end_time=0.5", "run.write_interval=0.25"]
+PLANAR_16 = ["mesh.cells_across=16", *PLANAR_UNIFORM, "run.end_time=0.5", "run.write_interval=0.25"]
 
 
 # the scheme in which the lab-silo wedge really diverges at start-up (the

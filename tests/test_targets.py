@@ -31,6 +31,15 @@ def cost_target(limit, level=0.01, names=("a", "b")):
             "level": level, "limit": limit}  # fmt: skip
 
 
+def two_meshings(factor):
+    """A first-order series to Q_INF and a second-order one to ``factor`` Q_INF."""
+    b = series([4, 8, 16, 32], p=2.0)
+    for r in b["rows"]:
+        r["Q"] *= factor
+    derive_work_precision(b)
+    return {"a": series([8, 16, 32, 64]), "b": b}
+
+
 def test_a_cost_target_takes_the_cheapest_series_and_says_what_stands_in_the_way():
     # first order: 1% of Q_inf where c/n = 0.01 (n = 50 with c = 0.5); the
     # second series converges at second order, 1% where 0.5/n^2 = 0.01 (n ~ 7.1)
@@ -145,27 +154,34 @@ def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
     # converged Q is known only to their spread, so no grid is within 1% of
     # both; at a spread of 0.4% the second-order series' grids within 0.6% of
     # their own limit count
-    far = series([4, 8, 16, 32], p=2.0)
-    for r in far["rows"]:
-        r["Q"] *= 1.015
-    derive_work_precision(far)
-    wp = {"a": series([8, 16, 32, 64]), "b": far}
+    wp = two_meshings(1.015)
     (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=1e6)]})
     assert v.verdict == "missed" and "no grid is within 1% of every extrapolation" in v.detail
     assert "spread 1.5%" in v.detail
     # the orders as measured, not a fixed phrase
     assert "(the orders 1.00, 2.00 against the scheme's 2," in v.detail
-    near = series([4, 8, 16, 32], p=2.0)
-    for r in near["rows"]:
-        r["Q"] *= 1.004
-    derive_work_precision(near)
-    wp = {"a": series([8, 16, 32, 64]), "b": near}
+    wp = two_meshings(1.004)
     (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=1e6)]})
     # b at 8 across: 0.78% under its own limit, 0.38% under Q_INF (at 4: 2.7%
     # and 3.1%); a is within 1% of b's limit where its own error is 0.6%, at
     # 50 / 0.6 = 83 across, beyond its finest (64): projected
     assert v.verdict == "met" and "b: 8 across (measured)" in v.detail
     assert "a: 83 across (projected" in v.detail
+
+
+def test_a_missed_cost_target_says_when_the_estimates_spread_costs_more_than_the_order():
+    # b converges at second order to 0.7% under a's limit: within 1% of its own
+    # limit from 8 across (0.78% under it), of a's from 16 across (0.89%; at 8:
+    # 1.48%); the cheapest grid within 1% of both is b's 16 across, and what
+    # stands in the way is the spread, not b's order
+    wp = two_meshings(0.993)
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=0.5)]})
+    assert (v.verdict, v.value) == ("missed", pytest.approx(1e-3 * 16**2.5))
+    assert (
+        "In the way: the estimates' spread; b is within 1% of its own extrapolation from "
+        "8 across (measured), 0.181 CPU-s per simulated s, and within 1% of the farthest "
+        "(a, 2) from 16 across, 2 times the target"
+    ) in v.detail
 
 
 def test_a_finest_row_without_a_steady_rate_is_no_reference():

@@ -161,11 +161,12 @@ def bench_solver(
     progress
         The running case's progress (simulated time, ETA), as ``run_case`` takes it.
     """
-    preset = defaults("solver")["preset"]
+    preset, base = defaults("solver")["preset"], overrides(defaults("solver").get("set"))
     of = find_openfoam()
     rows = []
     for n in cells:
         sets = [
+            *base,
             f"mesh.cells_across={n}",
             f"run.end_time={end_time}",
             f"run.write_interval={end_time / 4}",

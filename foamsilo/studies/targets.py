@@ -126,10 +126,13 @@ class _Resolution:
     cost: float | None
     measured: bool
 
-    def words(self) -> str:
+    def where(self) -> str:
         how = "measured" if self.measured else "projected by the error model"
         cost = f", {self.cost:.3g} CPU-s per simulated s" if self.cost is not None else ""
-        return f"{self.series}: {self.cells:.0f} across ({how}){cost}"
+        return f"{self.cells:.0f} across ({how}){cost}"
+
+    def words(self) -> str:
+        return f"{self.series}: {self.where()}"
 
 
 def _resolution(
@@ -206,12 +209,26 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
         verdict = "met" if best.measured else "not shown"
     else:
         verdict = "missed"
-        detail += (
-            f". In the way: Q converges at order {g.order:.2f}, "
-            f"{'under' if (g.order or 0.0) < FORMAL_ORDER else 'not under'} the scheme's "
-            f"{FORMAL_ORDER:g}, so the {level:.0%} grid is {best.cells:.0f} across and costs "
-            f"{best.cost / float(t['limit']):.2g} times the target"
-        )
+        own = _resolution(best.series, wp[best.series], level)
+        mine = g.extrapolated
+        if own is not None and own.cells < best.cells and mine is not None:
+            # the series' own limit is reached sooner: the other estimates cost the rest
+            far, q = max(((s, float(h.extrapolated)) for s, h in grids.items()
+                          if h.extrapolated is not None),
+                         key=lambda sq: abs(sq[1] / mine - 1))  # fmt: skip
+            detail += (
+                f". In the way: the estimates' spread; {best.series} is within {level:.0%} "
+                f"of its own extrapolation from {own.where()}, and "
+                f"within {level:.0%} of the farthest ({far}, {q:.5g}) from "
+                f"{best.cells:.0f} across, {best.cost / float(t['limit']):.2g} times the target"
+            )
+        else:
+            detail += (
+                f". In the way: Q converges at order {g.order:.2f}, "
+                f"{'under' if (g.order or 0.0) < FORMAL_ORDER else 'not under'} the scheme's "
+                f"{FORMAL_ORDER:g}, so the {level:.0%} grid is {best.cells:.0f} across and "
+                f"costs {best.cost / float(t['limit']):.2g} times the target"
+            )
     return best.cost, verdict, detail
 
 

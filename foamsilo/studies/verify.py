@@ -112,6 +112,8 @@ def channel_scene(entry: dict[str, Any], channel: Channel, extra: Sequence[str] 
     sets = [
         f"silo.width={width!r}",
         "mesh.cells_across=8",
+        "mesh.growth_rate=1.0",
+        "mesh.orifice_edge_refinement=1.0",
         f"silo.orifice_width={width / 4!r}",
         f"mesh.representation='{'planar' if plane else 'axisymmetric'}'",
         "gas.mode='open-top'",
