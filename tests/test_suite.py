@@ -594,3 +594,33 @@ def test_one_row_of_a_series_runs_for_real_and_joins_the_others(tmp_path, openfo
     rate = scene.material.density * scene.silo.feeder_flow_rate
     assert rows[1]["outcome"] == "steady"
     assert rows[1]["Q"] == pytest.approx(rate, rel=1e-3)
+
+
+def _planar_tables(node):
+    """Every table of the suite that runs the planar preset (its sets)."""
+    if isinstance(node, dict):
+        if node.get("preset") == "zhou-planar":
+            yield node
+        for v in node.values():
+            yield from _planar_tables(v)
+    elif isinstance(node, list):
+        for v in node:
+            yield from _planar_tables(v)
+
+
+def test_every_planar_suite_case_names_its_grading():
+    # the planar preset is graded since issue 18: an entry that does not name
+    # its grading would run the preset's grid, not the uniform one its rows
+    # were measured on (the quick sets replace the full ones: both count)
+    from foamsilo.scene import load_preset
+    from foamsilo.studies.cases import overrides, study_table
+
+    keys = {"mesh.growth_rate", "mesh.orifice_edge_refinement", "mesh.orifice_region",
+            "mesh.coarse_cells_across"}  # fmt: skip
+    sets = [t[k] for t in _planar_tables(study_table("suite")) for k in ("set", "quick_set")
+            if k in t]  # fmt: skip
+    assert len(sets) > 15
+    for table in sets:
+        assert keys <= set(table), table
+        scene = load_preset("zhou-planar", overrides(table))
+        assert scene.mesh.graded == (table["mesh.growth_rate"] > 1), table
