@@ -149,6 +149,26 @@ def test_a_presets_default_grid_is_judged_against_its_series():
     assert (r["within"], r["how"]) == (None, "no convergence series")
 
 
+def test_a_presets_default_grid_is_judged_on_every_estimate_it_is_also_given():
+    # its own series (to Q_INF) puts the default grid n 0.5/n low; another
+    # meshing of the scene extrapolates 0.8% higher, and against it the same
+    # grid is 1.1% low: not within 1%, and the 1% grid is where the own
+    # series' error is under 1% less the two estimates' gap (0.5 / 0.21%)
+    n = load_preset("zhou-planar").cells_across
+    wp = {"s": series([n // 4, n // 2, n]), "t": two_meshings(1.008)["b"]}
+    ask = {"series": "s", "level": 0.01}
+    (own,) = [r for r in default_resolutions({"work-precision": wp}, {"zhou-planar": ask})
+              if r["preset"] == "zhou-planar"]  # fmt: skip
+    (both,) = [r for r in default_resolutions({"work-precision": wp},
+                                              {"zhou-planar": {**ask, "also": ["t"]}})
+               if r["preset"] == "zhou-planar"]  # fmt: skip
+    assert (own["error"], own["within"]) == (pytest.approx(-0.5 / n), True)
+    assert (both["error"], both["within"]) == (pytest.approx((1 - 0.5 / n) / 1.008 - 1), False)
+    assert "against the farthest of 2 extrapolations (also t)" in both["how"]
+    gap = 1 - 1 / 1.008
+    assert f"1% needs s: {0.5 / (0.01 - gap):.0f} across (projected" in both["needed"]
+
+
 def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
     # two meshings of one scene converging to Q_INF and to 1.5% above it: the
     # converged Q is known only to their spread, so no grid is within 1% of

@@ -301,8 +301,14 @@ def _preset_error(data: dict[str, Any], cells: int) -> tuple[float | None, str]:
     return None, "no grid convergence estimate"
 
 
-def _needed(name: str, data: dict[str, Any], level: float) -> str:
-    res = _resolution(name, data, level)
+def _extrapolations(wp: dict[str, Any], names: list[str]) -> list[float]:
+    """Return the extrapolated Q of each named series that has one."""
+    grids = [_grid(wp[n].get("convergence")) for n in names]
+    return [float(g.extrapolated) for g in grids if g is not None and g.extrapolated]
+
+
+def _needed(name: str, data: dict[str, Any], level: float, refs: list[float] | None = None) -> str:
+    res = _resolution(name, data, level, refs)
     if res is not None:
         return f"{level:.0%} needs {res.words()}"
     conv = data.get("convergence") or {}
@@ -317,14 +323,16 @@ def _needed(name: str, data: dict[str, Any], level: float) -> str:
 
 
 def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[dict[str, Any]]:
-    """Each preset's default grid against its own series.
+    """Each preset's default grid against its own series (and those it is ``also`` judged on).
 
     Parameters
     ----------
     result : dict
         The suite's results (``work-precision`` and ``presets``).
     table : dict
-        ``suite.toml`` ``[default-resolution]``: preset -> series and level.
+        ``suite.toml`` ``[default-resolution]``: preset -> series and level, and
+        ``also``: the scene's other series, whose extrapolations count too (the
+        converged Q is known only to their spread, as in a cost target).
 
     Returns
     -------
@@ -357,8 +365,18 @@ def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[d
         g = _grid(data.get("convergence"))
         if run is not None and g is not None and g.extrapolated:
             err, how = run["Q"] / g.extrapolated - 1, "the preset's run, against the extrapolated Q"
+        also = [a for a in ask.get("also", []) if a in wp and _extrapolations(wp, [a])]
+        refs = _extrapolations(wp, [ask["series"], *also]) if also else None
+        grid_q = run or next((r for r in data["rows"] if r["cells_across"] == cells
+                              and r.get("outcome") == "steady" and r.get("Q")), None)  # fmt: skip
+        if refs and grid_q is not None:
+            # against the farthest of the scene's estimates
+            err = max((grid_q["Q"] / e - 1 for e in refs), key=abs)
+            src = "the preset's run" if run is not None else "measured"
+            how = f"{src}, against the farthest of {len(refs)} extrapolations"
+            how += f" (also {', '.join(also)})"
         row.update(level=level, error=err, how=f"{ask['series']}, {how}",
-                   needed=_needed(ask["series"], data, level))  # fmt: skip
+                   needed=_needed(ask["series"], data, level, refs))  # fmt: skip
         row["within"] = None if err is None else abs(err) <= level
         out.append(row)
     return out
