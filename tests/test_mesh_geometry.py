@@ -8,8 +8,8 @@ import pytest
 from foamsilo.mesh import profile_layout, slot_divisions, top_cell_ratio, vertical_rows
 from foamsilo.scene import load_preset
 
-#: The mesh keys' defaults: a uniform mesh (the planar preset is graded since issue 18)
-UNIFORM = {
+#: The mesh keys' defaults, a uniform mesh (the planar preset is graded since issue 18)
+MESH_DEFAULTS = {
     "mesh.growth_rate": 1.0,
     "mesh.orifice_edge_refinement": 1.0,
     "mesh.orifice_region": 1.0,
@@ -19,7 +19,7 @@ UNIFORM = {
 
 def planar(n: int, **sets: object):
     """The planar silo at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
-    sets = {**UNIFORM, **sets}
+    sets = {**MESH_DEFAULTS, **sets}
     return load_preset(
         "zhou-planar", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
     )
