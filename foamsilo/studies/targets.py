@@ -173,7 +173,7 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     if not grids:
         return None, "not shown", "no series with a grid convergence estimate" + (
             f" ({', '.join(missing)} not run)" if missing else "")  # fmt: skip
-    refs = [float(g.extrapolated) for g in grids.values() if g.extrapolated is not None]
+    refs = _extrapolations(wp, list(grids))
     spread = max(refs) / min(refs) - 1
     span = (
         "extrapolated Q: "
