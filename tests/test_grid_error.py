@@ -24,7 +24,7 @@ from foamsilo.post.grid import (
     write_grid_file,
 )
 
-from .conftest import PLANAR_UNIFORM_ARGS
+from .conftest import LAB_UNIFORM, PLANAR_UNIFORM_ARGS
 
 
 def test_companions_are_the_grid_divided_by_the_ratio_and_its_square():
@@ -111,14 +111,16 @@ def test_a_graded_mesh_is_coarsened_as_a_whole():
     from foamsilo.post.grid import companion_overrides
     from foamsilo.scene import load_preset
 
-    uniform = load_preset("zhou-cyl-bottom")
+    uniform = load_preset("zhou-cyl-bottom", [*LAB_UNIFORM, "mesh.cells_across=72"])
     assert companion_overrides(uniform, 48) == ["mesh.cells_across=48"]
-    graded = load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.cells_across=72"])
+    graded = load_preset("zhou-cyl-bottom", [*LAB_UNIFORM, "mesh.growth_rate=1.1",
+                                             "mesh.cells_across=72"])  # fmt: skip
     sets = companion_overrides(graded, 32)
     assert sets[:2] == ["mesh.cells_across=32", "mesh.coarse_cells_across=7"]  # 16 / 2.25
     g = float(sets[2].split("=")[1])
     assert g == pytest.approx(1.1**2.25, rel=1e-12)
-    coarse = load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.3", "mesh.cells_across=72"])
+    coarse = load_preset("zhou-cyl-bottom", [*LAB_UNIFORM, "mesh.growth_rate=1.3",
+                                             "mesh.cells_across=72"])  # fmt: skip
     assert companion_overrides(coarse, 32)[2] == "mesh.growth_rate=1.5"  # within its range
 
 

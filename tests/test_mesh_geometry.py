@@ -8,7 +8,8 @@ import pytest
 from foamsilo.mesh import profile_layout, slot_divisions, top_cell_ratio, vertical_rows
 from foamsilo.scene import load_preset
 
-#: The mesh keys' defaults, a uniform mesh (the planar preset is graded since issue 18)
+#: The mesh keys' defaults, a uniform mesh (the planar and lab silo presets are
+#: graded since issue 18)
 MESH_DEFAULTS = {
     "mesh.growth_rate": 1.0,
     "mesh.orifice_edge_refinement": 1.0,
@@ -22,6 +23,14 @@ def planar(n: int, **sets: object):
     sets = {**MESH_DEFAULTS, **sets}
     return load_preset(
         "zhou-planar", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
+    )
+
+
+def lab_silo(n: int, **sets: object):
+    """The lab silo at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
+    sets = {**MESH_DEFAULTS, **sets}
+    return load_preset(
+        "zhou-cyl-bottom", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
     )
 
 
@@ -79,7 +88,7 @@ def test_blocks_carry_their_patches():
 
 
 def test_wedge_axis_and_lateral_orifice_sides():
-    wedge = profile_layout(load_preset("zhou-cyl-bottom", ["mesh.cells_across=24"]))
+    wedge = profile_layout(lab_silo(24))
     assert {b.sides[3] for b in wedge.blocks if b.corners[0][0] == 0.0} == {"axis"}
     lateral = profile_layout(load_preset("zhou-rect-lateral"))
     s = load_preset("zhou-rect-lateral").silo
@@ -129,13 +138,12 @@ def _rows_between(scene, a: float, b: float) -> int:
 def test_a_graded_mesh_refined_as_a_whole_refines_beyond_the_orifice_region():
     from foamsilo.mesh.layout import similar_grading
 
-    fixed = ["mesh.growth_rate=1.1", "mesh.coarse_cells_across=16"]
-    base = load_preset("zhou-cyl-bottom", ["mesh.cells_across=72", *fixed])
+    fixed = {"mesh.growth_rate": 1.1, "mesh.coarse_cells_across": 16}
+    base = lab_silo(72, **fixed)
     for n in (144, 216):
         g, c = similar_grading(n, 72, 1.1, 16)
-        alike = load_preset("zhou-cyl-bottom", [f"mesh.cells_across={n}",
-                            f"mesh.growth_rate={g!r}", f"mesh.coarse_cells_across={c}"])  # fmt: skip
-        kept = load_preset("zhou-cyl-bottom", [f"mesh.cells_across={n}", *fixed])
+        alike = lab_silo(n, **{"mesh.growth_rate": g, "mesh.coarse_cells_across": c})
+        kept = lab_silo(n, **fixed)
         s = n / 72
         # in the orifice region (up to 1 D = 0.01 m), the growth (1-3 D) and
         # the column above: s times the rows of the 72-across grid, to a cell
@@ -151,8 +159,7 @@ def test_a_graded_mesh_refined_as_a_whole_refines_beyond_the_orifice_region():
 
 
 def test_a_graded_profile_keeps_the_orifice_cells_and_spends_fewer_elsewhere():
-    lab = [load_preset("zhou-cyl-bottom", ["mesh.cells_across=72", f"mesh.growth_rate={g}"])
-           for g in (1.0, 1.1)]  # fmt: skip
+    lab = [lab_silo(72, **{"mesh.growth_rate": g}) for g in (1.0, 1.1)]
     for uniform_scene, graded_scene in ((planar(72), planar(72, **{"mesh.growth_rate": 1.1})), lab):
         uniform = profile_layout(uniform_scene)
         graded = profile_layout(graded_scene)
@@ -279,7 +286,7 @@ def test_the_orifice_edge_is_refined_only_on_graded_meshes():
     from foamsilo.errors import SceneError
 
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
-        load_preset("zhou-cyl-bottom", ["mesh.orifice_edge_refinement=4"])  # uniform
+        lab_silo(72, **{"mesh.orifice_edge_refinement": 4})  # uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement.*allowed here: 1"):
         load_preset("venier-test2", ["mesh.orifice_edge_refinement=4"])  # eccentric, uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement"):

@@ -17,9 +17,11 @@ import pytest
 
 from foamsilo.pipeline import Budget, CaseSpec, run_many
 
+from .conftest import LAB_FORMER
+
 pytestmark = pytest.mark.openfoam
 
-SETS = ("mesh.growth_rate=1.1", "run.end_time=0.3", "run.write_interval=0.15")
+SETS = (*LAB_FORMER, "mesh.growth_rate=1.1", "run.end_time=0.3", "run.write_interval=0.15")
 
 
 def test_refining_the_orifice_edge_beats_halving_every_cell(tmp_path, solver):

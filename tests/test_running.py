@@ -31,7 +31,7 @@ from foamsilo.cli import main
 from foamsilo.foam import dict_value
 from foamsilo.scene import load_preset, load_scene_file
 
-from .conftest import PLANAR_UNIFORM
+from .conftest import LAB_FORMER, LAB_UNIFORM, PLANAR_UNIFORM
 
 pytestmark = pytest.mark.openfoam
 
@@ -170,7 +170,7 @@ def test_unstable_scene_is_stopped_with_the_divergence_error(tmp_path, solver):
     # t ~ 0.011 s (docs/geometry.md); three passes run it
     case = tmp_path / "unstable"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["numerics.outer_correctors=1", "run.end_time=0.05", LAGGED,
+                  *sets([*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.05", LAGGED,
                          "run.write_interval=0.05", "run.max_recoveries=0",
                          "run.max_step_retakes=0"]))  # fmt: skip
     assert code != 0
@@ -195,8 +195,8 @@ def test_a_step_whose_iterations_blow_up_is_taken_again_by_the_solver(tmp_path, 
     # steps), to round-off
     case = tmp_path / "retaken"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["numerics.outer_correctors=1", "run.end_time=0.015", LAGGED,
-                         LINEAR_START, "run.write_interval=0.015",
+                  *sets([*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.015",
+                         LAGGED, LINEAR_START, "run.write_interval=0.015",
                          "run.max_recoveries=0"]))  # fmt: skip
     assert code == 0, s
     retakes = s["run"]["step_retakes"]
@@ -228,7 +228,7 @@ def test_a_step_whose_iterations_blow_up_is_taken_again_by_the_solver(tmp_path, 
 # orifice whose inflow/outflow split moves) and the gas-coupled planar silo
 # (the pore pressure)
 RETAKE_CHECK_SCENES = [
-    ("zhou-cyl-bottom", ["mesh.cells_across=36"]),
+    ("zhou-cyl-bottom", [*LAB_FORMER, "mesh.cells_across=36"]),
     ("hopper-conical", ["mesh.cells_across=40", "run.end_time=0.002", "run.write_interval=0.002"]),
     ("zhou-rect-lateral", ["mesh.cells_across=32"]),
     ("zhou-planar-gas", ["mesh.cells_across=16"]),
@@ -276,7 +276,8 @@ def test_a_step_whose_outer_iterations_grow_is_taken_again_with_half_the_share(
     other = "change" if criterion == "growth" else "growth"
     case = tmp_path / "share"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["mesh.cells_across=36", "run.end_time=0.08", "run.write_interval=0.08",
+                  *sets([*LAB_FORMER, "mesh.cells_across=36", "run.end_time=0.08",
+                         "run.write_interval=0.08",
                          f"numerics.outer_{criterion}_limit={limit}",
                          f"numerics.outer_{other}_limit=0", "run.retake_check_interval=1",
                          "run.max_recoveries=0"]))  # fmt: skip
@@ -365,7 +366,8 @@ def test_retakes_are_bounded_per_discharge_time_then_the_runner_caps_the_step(tm
     # AIR_VOID: at the default light phase the scene does not blow up)
     case = tmp_path / "budget"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["numerics.outer_correctors=1", "run.end_time=0.015", LAGGED, AIR_VOID,
+                  *sets([*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.015",
+                         LAGGED, AIR_VOID,
                          LINEAR_START, "run.write_interval=0.005", "run.max_recoveries=3",
                          "run.max_step_retakes=1"]))  # fmt: skip
     assert code == 0, s
@@ -478,8 +480,8 @@ def test_a_diverged_run_recovers_with_more_iterations_then_goes_back(tmp_path, s
     # tests/test_void_density.py)
     case = tmp_path / "recover"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets(["mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05",
-                         LAGGED, AIR_VOID, LINEAR_START, "run.max_step_retakes=0"]))  # fmt: skip
+                  *sets([*LAB_UNIFORM, "mesh.cells_across=48", "run.end_time=0.1",
+                         "run.write_interval=0.05", LAGGED, AIR_VOID, LINEAR_START, "run.max_step_retakes=0"]))  # fmt: skip
     assert code == 0, s
     recoveries = s["run"]["recoveries"]
     assert len(recoveries) == 1, recoveries
@@ -537,7 +539,7 @@ def test_no_step_is_retaken_in_the_start_up_of_a_scene_that_iterates(tmp_path, o
     # and the 3D thin lateral silo did not finish; the runner iterates it)
     from foamsilo.case import create_case
 
-    wedge = load_preset("zhou-cyl-bottom", ["mesh.cells_across=16"])
+    wedge = load_preset("zhou-cyl-bottom", [*LAB_FORMER, "mesh.cells_across=16"])
     w = create_case(wedge, tmp_path / "wedge", openfoam).path
     assert wedge.outer_correctors > 1
     retake_from = float(dict_value(w / "system" / "controlDict", "retakeFrom"))
@@ -570,7 +572,7 @@ def test_a_second_recovery_halves_the_step(tmp_path, openfoam):
                    lambda _: None)  # fmt: skip
     assert rec["outer_correctors"] == 1 and rec["max_delta_t"] == pytest.approx(5e-4)
     # raised iterations that let the volume fraction blow up go back to the scene's
-    wedge = load_preset("zhou-cyl-bottom", ["mesh.cells_across=16"])
+    wedge = load_preset("zhou-cyl-bottom", [*LAB_FORMER, "mesh.cells_across=16"])
     w = create_case(wedge, tmp_path / "wedge", openfoam).path
     rec = _recover(w, DivergenceError("Courant number", None, "", None, w, 1e-3), 1, wedge,
                    lambda _: None)  # fmt: skip
@@ -615,7 +617,7 @@ def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, sol
 
     case, limit = tmp_path / "limit", 20.0
     spec = CaseSpec(case, "zhou-cyl-bottom",
-                    ("run.end_time=0.6", LAGGED, AIR_VOID, LINEAR_START,
+                    (*LAB_UNIFORM, "run.end_time=0.6", LAGGED, AIR_VOID, LINEAR_START,
                      "run.max_step_retakes=0"),
                     max_wall_seconds=limit)  # fmt: skip
     with pytest.raises(RunTimeLimitError) as info:

@@ -26,9 +26,11 @@ import pytest
 
 from foamsilo.pipeline import Budget, CaseSpec, run_many
 
+from .conftest import LAB_FORMER
+
 pytestmark = pytest.mark.openfoam
 
-SETS = ("mesh.cells_across=48", "mesh.growth_rate=1.1", "run.end_time=0.3",
+SETS = (*LAB_FORMER, "mesh.cells_across=48", "mesh.growth_rate=1.1", "run.end_time=0.3",
         "run.write_interval=0.15", "numerics.open_boundary_acceleration='face'",
         "numerics.stress_pressure_coupling='implicit'")  # fmt: skip
 

@@ -596,31 +596,59 @@ def test_one_row_of_a_series_runs_for_real_and_joins_the_others(tmp_path, openfo
     assert rows[1]["Q"] == pytest.approx(rate, rel=1e-3)
 
 
-def _planar_tables(node):
-    """Every table of the suite that runs the planar preset (its sets)."""
+def _preset_tables(node, preset):
+    """Every table of a study that runs ``preset`` (its sets)."""
     if isinstance(node, dict):
-        if node.get("preset") == "zhou-planar":
+        if node.get("preset") == preset:
             yield node
         for v in node.values():
-            yield from _planar_tables(v)
+            yield from _preset_tables(v, preset)
     elif isinstance(node, list):
         for v in node:
-            yield from _planar_tables(v)
+            yield from _preset_tables(v, preset)
 
 
-def test_every_planar_suite_case_names_its_grading():
-    # the planar preset is graded since issue 18: an entry that does not name
-    # its grading would run the preset's grid, not the uniform one its rows
-    # were measured on (the quick sets replace the full ones: both count)
+#: The mesh keys every study table on a graded preset names
+MESH_KEYS = {"mesh.growth_rate", "mesh.orifice_edge_refinement", "mesh.orifice_region",
+             "mesh.coarse_cells_across"}  # fmt: skip
+#: And the stress coupling's keys the lab silo's preset sets since 2026-12-07
+SHARE_KEYS = {"numerics.stress_pressure_divergence", "numerics.outer_growth_limit",
+              "numerics.outer_change_limit"}  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("preset", "keys", "least"),
+    [("zhou-planar", MESH_KEYS, 15), ("zhou-cyl-bottom", MESH_KEYS | SHARE_KEYS, 25)],
+)
+def test_every_suite_case_on_a_graded_preset_names_its_grading(preset, keys, least):
+    # the planar and lab silo presets are graded since issue 18 (the lab
+    # silo's with half the stress's divergence share): an entry that does not
+    # name its grading (and share) would run the preset's grid, not the one
+    # its rows were measured on (the quick sets replace the full ones: both
+    # count; the main job's target names no set: it judges the preset)
     from foamsilo.scene import load_preset
     from foamsilo.studies.cases import overrides, study_table
 
-    keys = {"mesh.growth_rate", "mesh.orifice_edge_refinement", "mesh.orifice_region",
-            "mesh.coarse_cells_across"}  # fmt: skip
-    sets = [t[k] for t in _planar_tables(study_table("suite")) for k in ("set", "quick_set")
-            if k in t]  # fmt: skip
-    assert len(sets) > 15
+    tables = [t for t in _preset_tables(study_table("suite"), preset) if "kind" not in t]
+    assert all("set" in t for t in tables), [t for t in tables if "set" not in t]
+    sets = [t[k] for t in tables for k in ("set", "quick_set") if k in t]
+    assert len(sets) > least
     for table in sets:
         assert keys <= set(table), table
-        scene = load_preset("zhou-planar", overrides(table))
+        scene = load_preset(preset, overrides(table))
         assert scene.mesh.graded == (table["mesh.growth_rate"] > 1), table
+
+
+def test_the_lab_silo_s_bench_and_verification_cases_name_its_former_defaults():
+    # the MPI and post benchmarks and the pipe flow were measured on the lab
+    # silo's preset before it was graded with half the share
+    from foamsilo.studies.cases import study_table
+
+    for study, least in (("bench", 2), ("verification", 1)):
+        tables = list(_preset_tables(study_table(study), "zhou-cyl-bottom"))
+        assert len(tables) >= least, study
+        for t in tables:
+            named = set(t.get("set", {}))
+            if t.get("law") != "pipe":  # the channel builds its own mesh
+                assert MESH_KEYS <= named, (study, t)
+            assert SHARE_KEYS <= named, (study, t)

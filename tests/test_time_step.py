@@ -26,9 +26,11 @@ import pytest
 
 from foamsilo.pipeline import Budget, CaseSpec, run_many
 
+from .conftest import LAB_FORMER
+
 pytestmark = pytest.mark.openfoam
 
-SETS = ("mesh.cells_across=96", "mesh.growth_rate=1.1", "run.end_time=0.3",
+SETS = (*LAB_FORMER, "mesh.cells_across=96", "mesh.growth_rate=1.1", "run.end_time=0.3",
         "run.write_interval=0.15")  # fmt: skip
 HALF_STEP = ("run.max_courant=0.25", "run.max_interface_courant=0.25")
 

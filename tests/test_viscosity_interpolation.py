@@ -25,9 +25,11 @@ import pytest
 
 from foamsilo.pipeline import Budget, CaseSpec, run_many
 
+from .conftest import LAB_FORMER
+
 pytestmark = pytest.mark.openfoam
 
-SETS = ("mesh.growth_rate=1.1", "run.end_time=0.3", "run.write_interval=0.15")
+SETS = (*LAB_FORMER, "mesh.growth_rate=1.1", "run.end_time=0.3", "run.write_interval=0.15")
 HARMONIC = ("numerics.viscosity_interpolation='harmonic'",)
 
 
@@ -69,7 +71,7 @@ def test_the_start_ups_face_mean_ends_with_the_start_up(tmp_path, solver):
     or one that did not end, fails one of the two.
     """
     start_up = (0.01 / 9.81) ** 0.5
-    sets = ("mesh.cells_across=36", f"run.end_time={2 * start_up:.6g}",
+    sets = (*LAB_FORMER, "mesh.cells_across=36", f"run.end_time={2 * start_up:.6g}",
             f"run.write_interval={2 * start_up:.6g}", "run.max_recoveries=0")  # fmt: skip
     means = {
         "start-up": (),

@@ -27,6 +27,8 @@ from foamsilo.errors import SceneError
 from foamsilo.pipeline import Budget, CaseSpec, run_many
 from foamsilo.scene import load_preset
 
+from .conftest import LAB_FORMER, LAB_UNIFORM
+
 
 def _ran(specs: list[CaseSpec], cores: int = 2) -> list:
     """Run the cases; each must end without an error and with a summary."""
@@ -51,7 +53,7 @@ def test_the_light_phase_s_density_by_scene():
         load_preset("zhou-cyl-bottom", ["numerics.void_density=151.0"])
 
 
-LAB = ("mesh.cells_across=48", "mesh.growth_rate=1.1", "run.end_time=0.3",
+LAB = (*LAB_FORMER, "mesh.cells_across=48", "mesh.growth_rate=1.1", "run.end_time=0.3",
        "run.write_interval=0.15")  # fmt: skip
 
 
@@ -121,7 +123,7 @@ def test_the_lagged_wedge_starts_up_without_blowing_up(tmp_path, solver):
     = 1.2`); at the default light phase it runs through with neither a step
     retake nor a recovery allowed.
     """
-    sets = ("mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05",
+    sets = (*LAB_UNIFORM, "mesh.cells_across=48", "run.end_time=0.1", "run.write_interval=0.05",
             "numerics.stress_pressure_coupling='lagged'", "run.max_step_retakes=0",
             "run.max_recoveries=0")  # fmt: skip
     (out,) = _ran([CaseSpec(tmp_path / "lagged", "zhou-cyl-bottom", sets)], cores=1)

@@ -584,9 +584,9 @@ class Numerics:
     stress_pressure_divergence: float = _f(
         "with the implicit stress-pressure coupling: the share of its divergence part (the "
         "stress's change with the pressure, div(M dp), beside n.M.n in the Laplacian) "
-        "taken in the projection; 1: the whole linearisation; less: a diagnostic for "
-        "bursts in fine axisymmetric meshes, what each share does to which scene in "
-        "docs/solver.md; no effect on a converged step",
+        "taken in the projection; 1: the whole linearisation; less: fewer bursts in fine "
+        "axisymmetric meshes (the lab silo's preset takes 0.5), what each share does to "
+        "which scene in docs/solver.md; no effect on a converged step",
         "",
         gt=0,
         le=1,
