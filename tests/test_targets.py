@@ -169,6 +169,21 @@ def test_a_presets_default_grid_is_judged_on_every_estimate_it_is_also_given():
     assert f"1% needs s: {0.5 / (0.01 - gap):.0f} across (projected" in both["needed"]
 
 
+def test_a_preset_with_estimates_further_apart_than_its_level_says_so():
+    # the other meshing extrapolates 1.5% higher: no grid can be within 1% of
+    # both; the row says how far apart they are and what the preset's own
+    # series alone would ask (1% of its own limit: 0.5/n under 0.01 from
+    # n = 50, the first of its grids there n/2)
+    n = load_preset("zhou-planar").cells_across
+    wp = {"s": series([n // 4, n // 2, n]), "t": two_meshings(1.015)["b"]}
+    ask = {"series": "s", "level": 0.01, "also": ["t"]}
+    (row,) = [r for r in default_resolutions({"work-precision": wp}, {"zhou-planar": ask})
+              if r["preset"] == "zhou-planar"]  # fmt: skip
+    assert row["within"] is False
+    assert row["needed"].startswith("no 1% grid from s: the extrapolations are 1.5% apart; ")
+    assert f"within 1% of its own alone: {n // 2} across (measured)" in row["needed"]
+
+
 def test_a_grid_counts_only_within_the_level_of_every_series_extrapolation():
     # two meshings of one scene converging to Q_INF and to 1.5% above it: the
     # converged Q is known only to their spread, so no grid is within 1% of

@@ -319,7 +319,16 @@ def _needed(name: str, data: dict[str, Any], level: float, refs: list[float] | N
                             [r["err_vs_finest"] for r in rows], level)  # fmt: skip
         if n is not None:
             return f"{level:.0%} of the finest grid from {n} across (measured, {conv['kind']})"
-    return f"no {level:.0%} grid from {name}"
+    words = f"no {level:.0%} grid from {name}"
+    spread = max(refs) / min(refs) - 1 if refs else 0.0
+    if spread >= level:
+        # no grid can be within the level of estimates further apart than it:
+        # say so, and what the series' own estimate alone would ask
+        own = _resolution(name, data, level)
+        words += f": the extrapolations are {spread:.1%} apart"
+        if own is not None:
+            words += f"; within {level:.0%} of its own alone: {own.where()}"
+    return words
 
 
 def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[dict[str, Any]]:
