@@ -172,6 +172,15 @@ def test_a_step_that_diverges_after_its_retakes_is_a_divergence():
         "Step diverged: Courant number 1e+30 (limit 0.5) at its end, in the step from t = 0.002"
     )
     assert mon2.divergence is not None and mon2.divergence.quantity == "Courant number"
+    # in a parallel run every rank's error line starts with its number: the
+    # same diagnosis, or the runner would not recover it
+    mon3 = LogMonitor(0.5, 0.5)
+    feed_steps(mon3, 3)
+    mon3.feed("[1] --> FOAM FATAL ERROR: ")
+    mon3.feed("[1] Step diverged: Courant number 92.9 (limit 0.5) at its end, in the step "
+              "from t = 0.0158316702 with deltaT = 0.001314166531, after 0 retakes")  # fmt: skip
+    assert mon3.divergence is not None and mon3.divergence.quantity == "Courant number"
+    assert mon3.diverged_step_start == 0.0158316702
 
 
 def test_a_floating_point_trap_is_a_divergence_the_runner_can_recover():

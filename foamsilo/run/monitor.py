@@ -97,6 +97,8 @@ _RE_OUTER = re.compile(
     + r" of the fastest grain's speed"
 )
 _RE_STEP_DIVERGED = re.compile(r"^Step diverged: (volume fraction|Courant number) (.*)$")
+#: the rank a parallel run's error lines start with (``[1] Step diverged: ...``)
+_RE_RANK = re.compile(r"^\[\d+\]\s*")
 _RE_STEP_FROM = re.compile(r"in the step from t = " + _FLOAT)
 _RE_ALPHA = re.compile(
     r"^Phase-1 volume fraction = "
@@ -239,7 +241,7 @@ class LogMonitor:
             self._in_fatal = True
         if self._in_fatal:
             self.fatal.append(line)
-            m = _RE_STEP_DIVERGED.match(line.strip())
+            m = _RE_STEP_DIVERGED.match(_RE_RANK.sub("", line.strip()))
             if m:
                 self._diverge(m.group(1), m.group(2))
                 start = _RE_STEP_FROM.search(m.group(2))
