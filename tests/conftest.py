@@ -44,16 +44,17 @@ PLANAR_UNIFORM = ("mesh.growth_rate=1", "mesh.orifice_edge_refinement=1")
 PLANAR_UNIFORM_ARGS = tuple(a for s in PLANAR_UNIFORM for a in ("--set", s))
 
 #: The lab silo's preset (zhou-cyl-bottom) as it was before 2026-12-07: its
-#: uniform mesh of 72 across (the coarse cells count where a test grades it)
-#: and the whole stress divergence share with its step retakes (the preset is
-#: graded, with half the share, since issue 18); a test's own overrides come
-#: after them; as command-line arguments too
+#: uniform mesh (the coarse cells count where a test grades it), of 72 across
+#: where a test sets no cells across, and the whole stress divergence share
+#: with its step retakes (the preset is graded, with half the share, since
+#: issue 18); a test's own overrides come after them; as command-line
+#: arguments too
 LAB_UNIFORM = (
-    "mesh.cells_across=72",
     "mesh.growth_rate=1",
     "mesh.orifice_edge_refinement=1",
     "mesh.coarse_cells_across=16",
 )
+LAB_UNIFORM_72 = ("mesh.cells_across=72", *LAB_UNIFORM)
 LAB_WHOLE_SHARE = (
     "numerics.stress_pressure_divergence=1",
     "numerics.outer_growth_limit=2",

@@ -31,7 +31,7 @@ from foamsilo.cli import main
 from foamsilo.foam import dict_value
 from foamsilo.scene import load_preset, load_scene_file
 
-from .conftest import LAB_FORMER, LAB_UNIFORM, PLANAR_UNIFORM
+from .conftest import LAB_FORMER, LAB_UNIFORM, LAB_UNIFORM_72, PLANAR_UNIFORM
 
 pytestmark = pytest.mark.openfoam
 
@@ -164,7 +164,7 @@ def test_ctrl_c_stops_the_run_as_an_interruption_to_resume(tmp_path, solver):
     assert s["run"]["start_time"] == pytest.approx(float(err["last_good_time"]))
 
 
-UNSTABLE = [*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.05", LAGGED,
+UNSTABLE = [*LAB_UNIFORM_72, "numerics.outer_correctors=1", "run.end_time=0.05", LAGGED,
             "run.write_interval=0.05", "run.max_recoveries=0", "run.max_step_retakes=0"]  # fmt: skip
 
 
@@ -200,7 +200,7 @@ def test_a_step_whose_iterations_blow_up_is_taken_again_by_the_solver(tmp_path, 
     # steps), to round-off
     case = tmp_path / "retaken"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets([*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.015",
+                  *sets([*LAB_UNIFORM_72, "numerics.outer_correctors=1", "run.end_time=0.015",
                          LAGGED, LINEAR_START, "run.write_interval=0.015",
                          "run.max_recoveries=0"]))  # fmt: skip
     assert code == 0, s
@@ -371,7 +371,7 @@ def test_retakes_are_bounded_per_discharge_time_then_the_runner_caps_the_step(tm
     # AIR_VOID: at the default light phase the scene does not blow up)
     case = tmp_path / "budget"
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--quiet",
-                  *sets([*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.015",
+                  *sets([*LAB_UNIFORM_72, "numerics.outer_correctors=1", "run.end_time=0.015",
                          LAGGED, AIR_VOID,
                          LINEAR_START, "run.write_interval=0.005", "run.max_recoveries=3",
                          "run.max_step_retakes=1"]))  # fmt: skip
@@ -622,7 +622,7 @@ def test_the_wall_time_limit_counts_the_attempts_before_a_recovery(tmp_path, sol
 
     case, limit = tmp_path / "limit", 20.0
     spec = CaseSpec(case, "zhou-cyl-bottom",
-                    (*LAB_UNIFORM, "run.end_time=0.6", LAGGED, AIR_VOID, LINEAR_START,
+                    (*LAB_UNIFORM_72, "run.end_time=0.6", LAGGED, AIR_VOID, LINEAR_START,
                      "run.max_step_retakes=0"),
                     max_wall_seconds=limit)  # fmt: skip
     with pytest.raises(RunTimeLimitError) as info:

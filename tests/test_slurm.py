@@ -24,7 +24,7 @@ from foamsilo.pipeline import CaseSpec
 from foamsilo.slurm import SlurmOptions, batch_script, job_dir
 from foamsilo.sweep import load_sweep
 
-from .conftest import LAB_UNIFORM
+from .conftest import LAB_UNIFORM_72
 from .test_running import LAGGED, cli, sets
 
 SWEEP = """
@@ -164,7 +164,7 @@ def test_a_failed_job_is_reported_with_its_diagnosis(tmp_path, solver, slurm):
     # at t ~ 0.011 s (tests/test_running.py); in a job, the worker's
     # diagnosis comes back: quantity, time, last good time, the case kept
     case = tmp_path / "unstable"
-    scene = [*LAB_UNIFORM, "numerics.outer_correctors=1", "run.end_time=0.05",
+    scene = [*LAB_UNIFORM_72, "numerics.outer_correctors=1", "run.end_time=0.05",
              "run.write_interval=0.05",
              LAGGED, "run.max_recoveries=0", "run.max_step_retakes=0"]  # fmt: skip
     code, s = cli("run", "zhou-cyl-bottom", "-o", str(case), "--slurm", "--poll", "0.5",
