@@ -118,7 +118,7 @@ def test_the_lab_silo_starts_up_at_its_presets_grid_without_a_recovery(tmp_path,
     """The main job's silo at its default grid (96 across, edges refined 3x), 0.1 s.
 
     Its edges refined 4x instead, the same grid crashed in the start-up now
-    and then (SIGFPE at t = 4-9 ms, by the written times alone: docs/solver.md,
+    and then (a floating-point trap, by the written times alone: docs/solver.md,
     "The lab silo's default grid"), which the runner recovers from t = 0;
     at 3x it starts with neither a step retake nor a recovery allowed.
     """
