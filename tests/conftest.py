@@ -47,8 +47,7 @@ PLANAR_UNIFORM_ARGS = tuple(a for s in PLANAR_UNIFORM for a in ("--set", s))
 #: uniform mesh (the coarse cells count where a test grades it), of 72 across
 #: where a test sets no cells across, and the whole stress divergence share
 #: with its step retakes (the preset is graded, with half the share, since
-#: issue 18); a test's own overrides come after them; as command-line
-#: arguments too
+#: issue 18); a test's own overrides come after them
 LAB_UNIFORM = (
     "mesh.growth_rate=1",
     "mesh.orifice_edge_refinement=1",
@@ -61,7 +60,6 @@ LAB_WHOLE_SHARE = (
     "numerics.outer_change_limit=0.05",
 )
 LAB_FORMER = (*LAB_UNIFORM, *LAB_WHOLE_SHARE)
-LAB_FORMER_ARGS = tuple(a for s in LAB_FORMER for a in ("--set", s))
 
 
 def coarse_planar(**overrides: object) -> Scene:
