@@ -18,20 +18,20 @@ MESH_DEFAULTS = {
 }
 
 
+def _uniform(preset: str, n: int, sets: dict[str, object]):
+    """``preset`` at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
+    sets = {**MESH_DEFAULTS, **sets}
+    return load_preset(preset, [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]])
+
+
 def planar(n: int, **sets: object):
     """The planar silo at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
-    sets = {**MESH_DEFAULTS, **sets}
-    return load_preset(
-        "zhou-planar", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
-    )
+    return _uniform("zhou-planar", n, sets)
 
 
 def lab_silo(n: int, **sets: object):
     """The lab silo at ``n`` across, on the uniform mesh unless ``sets`` grade it."""
-    sets = {**MESH_DEFAULTS, **sets}
-    return load_preset(
-        "zhou-cyl-bottom", [f"mesh.cells_across={n}", *[f"{k}={v}" for k, v in sets.items()]]
-    )
+    return _uniform("zhou-cyl-bottom", n, sets)
 
 
 def test_uniform_mesh_counts():

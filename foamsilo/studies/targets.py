@@ -174,7 +174,7 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
         return None, "not shown", "no series with a grid convergence estimate" + (
             f" ({', '.join(missing)} not run)" if missing else "")  # fmt: skip
     refs = _extrapolations(wp, list(grids))
-    spread = max(refs) / min(refs) - 1
+    spread = _spread(refs)
     span = (
         "extrapolated Q: "
         + ", ".join(f"{s} {g.extrapolated:.5g} (order {g.order:.2f})" for s, g in grids.items())
@@ -307,6 +307,11 @@ def _extrapolations(wp: dict[str, Any], names: list[str]) -> list[float]:
     return [float(g.extrapolated) for g in grids if g is not None and g.extrapolated]
 
 
+def _spread(refs: list[float] | None) -> float:
+    """Relative spread of a scene's extrapolated Q (0 with fewer than two)."""
+    return max(refs) / min(refs) - 1 if refs else 0.0
+
+
 def _needed(name: str, data: dict[str, Any], level: float, refs: list[float] | None = None) -> str:
     res = _resolution(name, data, level, refs)
     if res is not None:
@@ -320,7 +325,7 @@ def _needed(name: str, data: dict[str, Any], level: float, refs: list[float] | N
         if n is not None:
             return f"{level:.0%} of the finest grid from {n} across (measured, {conv['kind']})"
     words = f"no {level:.0%} grid from {name}"
-    spread = max(refs) / min(refs) - 1 if refs else 0.0
+    spread = _spread(refs)
     if spread >= level:
         # no grid can be within the level of estimates further apart than it:
         # say so, and what the series' own estimate alone would ask
