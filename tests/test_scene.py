@@ -31,9 +31,9 @@ def test_zhou_planar_preset_has_the_paper_values():
     assert s.eta_max == pytest.approx(100 * 2500 * math.sqrt(9.81 * 0.1**3), rel=1e-12)
     assert s.eta_max == pytest.approx(24761.361, rel=1e-7)
     assert s.representation == "planar"
-    # its 1% grid (issue 18): 36 cells across the orifice, graded away from it,
+    # its 1% grid (issue 18): 26 cells across the orifice, graded away from it,
     # the edges refined; the paper used 64 across, uniform
-    assert (s.mesh.cells_across, s.mesh.cells_across_orifice) == (144, None)
+    assert (s.mesh.cells_across, s.mesh.cells_across_orifice) == (104, None)
     assert s.mesh.graded and s.mesh.orifice_edge_refinement == 2
     assert s.time_scale == pytest.approx(math.sqrt(0.1 / 9.81))
 
