@@ -22,6 +22,23 @@ from pathlib import Path
 PARENT_DEATH_SIGNAL = "TERM"
 
 
+def cpu_model() -> str:
+    """Return the processor's model name (``/proc/cpuinfo``; else the platform's; ``""``).
+
+    A cost in CPU-s is a figure of the machine it was measured on: the runner
+    records it with each run, the studies with each row and report.
+    """
+    import platform
+
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or ""
+
+
 def _setpriv() -> str | None:
     return shutil.which("setpriv")
 

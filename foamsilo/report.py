@@ -212,7 +212,8 @@ def case_report(summary: RunSummary) -> Path:
             "## Run",
             "",
             f"{_fmt(run.get('steps'))} time steps, {_fmt(run.get('wall_seconds'), '.1f')} s wall, "
-            f"{_fmt(run.get('cpu_seconds'), '.1f')} s CPU on {run.get('n_procs', 1)} rank(s).",
+            f"{_fmt(run.get('cpu_seconds'), '.1f')} s CPU on {run.get('n_procs', 1)} rank(s)"
+            + (f" of {run['cpu']}." if run.get("cpu") else "."),
             "",
             f"Scheme: {outer_iterations(scene.outer_correctors)} per step, the granular "
             f"stress's share of a pressure change {scene.stress_pressure_coupling} in the "

@@ -91,6 +91,8 @@ def test_pictures_and_report(posted):
     f = CaseFields(case)
     assert f.orifice_centre((0.0, 0.1, 0.0, 0.4)) == (pytest.approx(0.05), 0.0)
     assert "| 2D Beverloo, C = 1.28 |" in report  # the comparison table
+    # the CPU time with the processor it was measured on
+    assert f"s CPU on 1 rank(s) of {s['run']['cpu']}." in report and s["run"]["cpu"]
 
 
 def test_compare_case_on_the_2d_beverloo_law(posted):

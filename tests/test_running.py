@@ -83,6 +83,10 @@ def test_two_ranks_through_a_hostfile_match_the_serial_rate(tmp_path, serial_16)
                   "--hostfile", str(hostfile), "--reconstruct", *sets(PLANAR_16))  # fmt: skip
     assert code == 0, s
     assert s["run"]["n_procs"] == 2
+    # the CPU time says which processor it was measured on
+    from foamsilo.process import cpu_model
+
+    assert s["run"]["cpu"] == serial_16["run"]["cpu"] == cpu_model() != ""
     assert sorted(p.name for p in case.glob("processor*")) == ["processor0", "processor1"]
     assert (case / "0.5" / "U").exists()  # reconstructed
     assert s["steady"] and serial_16["steady"]

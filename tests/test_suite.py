@@ -413,6 +413,9 @@ def test_a_row_counts_the_runner_s_recoveries_and_the_solver_s_retakes(tmp_path)
         ' {"time": 0.4, "growth": 9.0}]}'
     )
     assert record_fields(tmp_path) == {"recoveries": 1, "step_retakes": 2, "share_retakes": 3}
+    # and the processor its CPU time was measured on, where the record names it
+    (tmp_path / RUN_RECORD).write_text('{"status": "finished", "cpu": "A CPU"}')
+    assert record_fields(tmp_path)["cpu"] == "A CPU"
 
 
 def test_a_3d_series_leaves_its_o_grid_floor_rows_out_of_the_convergence():

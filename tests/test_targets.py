@@ -219,6 +219,28 @@ def test_a_missed_cost_target_says_when_the_estimates_spread_costs_more_than_the
     ) in v.detail
 
 
+def test_a_measured_cost_names_the_processor_it_was_measured_on():
+    # the spread case above with b's rows measured on two machines: each cost
+    # says where it was measured, and the two compared in the way say they
+    # are not of one machine
+    wp = two_meshings(0.993)
+    for r in wp["b"]["rows"]:
+        r["cpu"] = "CPU one" if r["cells_across"] == 8 else "CPU two"
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=0.5)]})
+    assert "b: 16 across (measured), 1.02 CPU-s per simulated s on CPU two" in v.detail
+    assert "8 across (measured), 0.181 CPU-s per simulated s on CPU one, and" in v.detail
+    assert v.detail.endswith("2 times the target (the two costs measured on different processors)")
+    # one machine: no such remark; a row that names none: no processor
+    for r in wp["b"]["rows"]:
+        r["cpu"] = "CPU one"
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=0.5)]})
+    assert "on CPU one" in v.detail and "different processors" not in v.detail
+    for r in wp["b"]["rows"]:
+        del r["cpu"]
+    (v,) = judge({"work-precision": wp}, {"targets": [cost_target(limit=0.5)]})
+    assert " on " not in v.detail
+
+
 def test_a_finest_row_without_a_steady_rate_is_no_reference():
     # the finest grid found no stationary regime: the errors "vs finest" and the
     # 5%/2% resolutions are taken against the finest steady one

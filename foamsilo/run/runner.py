@@ -51,7 +51,7 @@ from foamsilo.errors import (
     UsageError,
 )
 from foamsilo.foam import decompose_par, dict_value, reconstruct_par
-from foamsilo.process import shell_line
+from foamsilo.process import cpu_model, shell_line
 from foamsilo.run.monitor import LOG_NAME, STEP_TABLE, LogMonitor
 from foamsilo.scene import load_scene_file
 from foamsilo.solver import SolverBuild
@@ -131,6 +131,9 @@ class RunResult:
         The steps the solver took again with half the step because their outer
         iterations diverged (``run.max_step_retakes``): each one's start
         ``time``, ``detail``, failed ``delta_t`` and ``retake_delta_t``.
+    cpu
+        The processor the solver ran on (its model name; ``""`` if unknown):
+        what the CPU time was measured on.
     share_retakes
         The steps the solver took again at the same step with half the
         stress's divergence share because their outer iterations grew or the
@@ -152,6 +155,7 @@ class RunResult:
     emptied_at: float | None = None
     step_retakes: list[dict[str, Any]] = field(default_factory=list)
     share_retakes: list[dict[str, float | str]] = field(default_factory=list)
+    cpu: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-friendly form (the ``run`` section of the summary)."""
@@ -482,4 +486,5 @@ def run_solver(
         emptied_at=monitor.emptied_at,
         step_retakes=list(monitor.retakes),
         share_retakes=list(monitor.share_retakes),
+        cpu=cpu_model(),
     )

@@ -23,6 +23,7 @@ import numpy as np
 from foamsilo.errors import SceneError
 from foamsilo.pipeline import Backend, Budget, CaseSpec, LocalBackend, Outcome
 from foamsilo.post.steady import STEP_SWING_WARNING
+from foamsilo.process import cpu_model
 from foamsilo.run import STEP_TABLE
 from foamsilo.scene import format_override, load_preset, read_toml
 
@@ -199,7 +200,8 @@ def record_fields(case_dir: Path) -> dict[str, Any]:
 
     The runner's recoveries and the solver's steps taken again (at half the step,
     ``run.max_step_retakes``, or at half the divergence share,
-    ``numerics.outer_growth_limit``), each as a count.
+    ``numerics.outer_growth_limit``), each as a count; and the processor the
+    solver ran on (``cpu``), where the record names it.
     """
     from foamsilo.case import read_run_record
 
@@ -207,7 +209,11 @@ def record_fields(case_dir: Path) -> dict[str, Any]:
     if not record:
         return {}
     keys = ("recoveries", "step_retakes", "share_retakes")
-    return {k: len(record.get(k) or []) for k in keys}
+    out: dict[str, Any] = {k: len(record.get(k) or []) for k in keys}
+    if record.get("cpu"):
+        # the machine its CPU time was measured on
+        out["cpu"] = record["cpu"]
+    return out
 
 
 def run_rows(
@@ -244,16 +250,8 @@ def machine_info() -> dict[str, Any]:
 
     from foamsilo import __version__
 
-    cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     return {
-        "cpu": cpu,
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "platform": platform.platform(),
         "python": platform.python_version(),

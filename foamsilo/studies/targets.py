@@ -125,10 +125,13 @@ class _Resolution:
     cells: float
     cost: float | None
     measured: bool
+    #: the processor a measured cost was measured on, where its row names it
+    cpu: str | None = None
 
     def where(self) -> str:
         how = "measured" if self.measured else "projected by the error model"
-        cost = f", {self.cost:.3g} CPU-s per simulated s" if self.cost is not None else ""
+        on = f" on {self.cpu}" if self.cpu else ""
+        cost = f", {self.cost:.3g} CPU-s per simulated s{on}" if self.cost is not None else ""
         return f"{self.cells:.0f} across ({how}){cost}"
 
     def words(self) -> str:
@@ -155,7 +158,7 @@ def _resolution(
     n = coarsest_within([r["cells_across"] for r in steady], errs, level)
     if n is not None:
         row = next(r for r in steady if r["cells_across"] == n)
-        return _Resolution(name, float(n), _cost(row), True)
+        return _Resolution(name, float(n), _cost(row), True, row.get("cpu"))
     gap = max(abs(g.extrapolated / e - 1) for e in refs)
     model = g.cells_for(level - gap) if gap < level else None
     if model is None:
@@ -222,6 +225,9 @@ def _cost_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
                 f"within {level:.0%} of the farthest ({far}, {q:.5g}) from "
                 f"{best.cells:.0f} across, {best.cost / float(t['limit']):.2g} times the target"
             )
+            if own.cpu and best.cpu and own.cpu != best.cpu:
+                # a cost is its machine's: two rows' costs compare only on one
+                detail += " (the two costs measured on different processors)"
         else:
             detail += (
                 f". In the way: Q converges at order {g.order:.2f}, "
