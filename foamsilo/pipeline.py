@@ -655,15 +655,33 @@ def _worker_main() -> int:
     return 0
 
 
-def _run_worker(spec: CaseSpec, procs: list[subprocess.Popen[str]]) -> Outcome:
-    """Run one spec in a worker process (tied to this one: it dies with it)."""
+def _run_worker(spec: CaseSpec, procs: list[subprocess.Popen[str]], reap: bool = True) -> Outcome:
+    """Run one spec in a worker process (tied to this one: it dies with it).
+
+    With ``reap`` false the finished worker is left for the caller to wait
+    for (it stays in ``procs``): until then its CPU time is not in this
+    process's children's usage, from which a run of this process measures its
+    solver's.
+    """
+    import tempfile
+
     argv = tied_to_parent([sys.executable, "-m", "foamsilo.pipeline"])
     t0 = time.perf_counter()
-    proc = subprocess.Popen(
-        argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
-    procs.append(proc)
-    out, err = proc.communicate(json.dumps(spec.as_dict()))
+    with tempfile.TemporaryFile("w+") as errors:
+        proc = subprocess.Popen(
+            argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=errors, text=True
+        )
+        procs.append(proc)
+        assert proc.stdin is not None and proc.stdout is not None
+        with contextlib.suppress(BrokenPipeError):
+            proc.stdin.write(json.dumps(spec.as_dict()))
+            proc.stdin.close()
+        out = proc.stdout.read()  # to the worker's end; no wait(), which would reap it
+        proc.stdout.close()
+        if reap:
+            proc.wait()
+        errors.seek(0)
+        err = errors.read()
     try:
         data = json.loads(out)
         return Outcome(
@@ -674,7 +692,9 @@ def _run_worker(spec: CaseSpec, procs: list[subprocess.Popen[str]]) -> Outcome:
             data.get("wall_s", 0.0),
         )
     except (ValueError, KeyError):
-        message = f"the worker ended with status {proc.returncode}: {err[-2000:]}"
+        # an unreaped worker's status is read when its caller waits for it
+        status = proc.wait() if reap else "not read yet"
+        message = f"the worker ended with status {status}: {err[-2000:]}"
         return Outcome(
             spec,
             "crash",
@@ -753,12 +773,17 @@ def run_many(
     specs: list[CaseSpec],
     budget: Budget | None = None,
     on_done: Callable[[Outcome], None] | None = None,
+    keep: list[subprocess.Popen[str]] | None = None,
 ) -> list[Outcome]:
     """Prepare, run and reduce many cases, ``budget.cases_at_once`` at a time.
 
     Each case runs in its own worker process (``python -m foamsilo.pipeline``)
     tied to this one. Returns one :class:`Outcome` per spec, in order;
-    ``on_done`` is called as each finishes.
+    ``on_done`` is called as each finishes. With ``keep`` the finished
+    workers are added to it unreaped, for the caller to wait for: a case run
+    in this process beside them (:func:`grid_study`) measures its solver's
+    CPU time from this process's children's usage, which a reaped worker's
+    would enter.
 
     Raises
     ------
@@ -768,10 +793,11 @@ def run_many(
     """
     budget = budget or Budget()
     results: dict[int, Outcome] = {}
-    procs: list[subprocess.Popen[str]] = []
+    procs: list[subprocess.Popen[str]] = keep if keep is not None else []
     pool = ThreadPoolExecutor(max_workers=budget.cases_at_once)
     try:
-        futures = {pool.submit(_run_worker, s, procs): i for i, s in enumerate(specs)}
+        futures = {pool.submit(_run_worker, s, procs, keep is None): i
+                   for i, s in enumerate(specs)}  # fmt: skip
         for fut in as_completed(futures):
             i = futures[fut]
             results[i] = fut.result()
@@ -898,10 +924,14 @@ def grid_study(
 
     found: list[Outcome] = []
     failure: list[BaseException] = []
+    # the companions' workers, reaped only once the case has run: its solver's
+    # CPU time is this process's children's usage over the run, which a
+    # companion reaped meanwhile would enter
+    workers: list[subprocess.Popen[str]] = []
 
     def companions_run() -> None:
         try:
-            found.extend(run_many(companions, side, on_done=done))
+            found.extend(run_many(companions, side, on_done=done, keep=workers))
         except BaseException as exc:  # reported with the study, not lost in the thread
             failure.append(exc)
 
@@ -911,6 +941,8 @@ def grid_study(
     worker.start()
     run_case(spec, of=of, progress=progress, say=say)
     worker.join()
+    for p in workers:
+        p.wait()
     if failure:
         raise failure[0]
     values = [(o.summary or {}).get("Q") if o.ok else None for o in found]

@@ -105,6 +105,10 @@ def test_a_grid_study_s_band_holds_the_converged_planar_rate(tmp_path, solver):
     assert u["relative"] < 0.15
     report = (tmp_path / "p36" / "report.md").read_text()
     assert "GCI of 16 / 24 / 36 cells across" in report
+    # the case's CPU time is its own solver's (one rank: at most its wall
+    # time), not the companions' that finished beside it
+    run = s["run"]
+    assert run["n_procs"] == 1 and run["cpu_seconds"] <= 1.02 * run["wall_seconds"] + 0.2
 
 
 def test_a_graded_mesh_is_coarsened_as_a_whole():
@@ -153,3 +157,36 @@ def test_a_3d_o_grid_at_its_floor_is_no_refinement_family(tmp_path):
     for n in coarser_cells(least) + [least]:
         assert not arcs(n)[1]
     assert any(arcs(n)[1] for n in coarser_cells(least - 1))
+
+
+def test_workers_kept_unreaped_leave_this_process_s_cpu_time_alone(tmp_path):
+    """A grid study's case measures its solver's CPU time from this process's
+    children's usage while the companions' workers, also its children, run
+    beside it: a worker reaped then would add its CPU time to the case's (the
+    demo's case once said 160 CPU-s for 117 s wall on one rank). Workers kept
+    are not reaped until their caller waits for them.
+    """
+    import resource
+
+    from foamsilo.pipeline import Budget, CaseSpec, run_many
+
+    def children() -> float:
+        u = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return u.ru_utime + u.ru_stime
+
+    def spec(name: str) -> CaseSpec:
+        return CaseSpec(tmp_path / name, "no-such-preset")  # fails in the worker, quickly
+
+    kept: list = []
+    before = children()
+    (o,) = run_many([spec("kept")], Budget(cores=1), keep=kept)
+    assert o.status != "ok" and "no-such-preset" in str(o.error)
+    assert kept[0].returncode is None  # finished, not waited for
+    assert children() - before < 0.05
+    kept[0].wait()
+    spent = children() - before
+    assert spent > 0.2  # the worker's start-up and imports, now counted
+    # without keep a worker is reaped as it ends
+    before = children()
+    run_many([spec("reaped")], Budget(cores=1))
+    assert children() - before > 0.5 * spent
