@@ -472,6 +472,30 @@ def test_a_partial_run_into_a_fresh_report_directory_writes_its_report(tmp_path)
     assert "**zhou-cyl-lateral-rect**" in (tmp_path / "suite.md").read_text()
 
 
+def test_a_table_whose_rows_ran_on_several_processors_names_each_row_s():
+    # a CPU time is its machine's: where a table's rows name two processors
+    # each CPU cell says which; where they name one, none does
+    from foamsilo.studies.suite import short_cpu, suite_markdown
+
+    assert short_cpu("Intel(R) Xeon(R) Processor") == "Intel Xeon"
+    assert short_cpu("Intel(R) Core(TM) i7-8700 CPU @ 3.20GHz") == "Intel Core i7-8700"
+    assert short_cpu("AMD EPYC") == "AMD EPYC"
+    rows = [_series_row(n, q) for n, q in ((36, 0.0259), (48, 0.0280), (72, 0.0300))]
+    for r, cpu in zip(rows, ("Intel(R) Xeon(R) Processor", "AMD EPYC", "AMD EPYC"), strict=True):
+        r["cpu"] = cpu
+    series = {"law": None, "Q_law": None, "rows": rows}
+    derive_work_precision(series)
+    result = {"quick": False, "machine": {"cpu": "AMD EPYC", "cores": 2},
+              "jobs": "1 case at a time", "work-precision": {"zhou-cyl-bottom": series},
+              "commit": "abc", "wall_s": {}, "checks": []}  # fmt: skip
+    text = suite_markdown(result, "suite")
+    assert "| 72 | 72 (Intel Xeon) | - |" in text and "| 96 | 96 (AMD EPYC) | - |" in text
+    for r in rows:
+        r["cpu"] = "AMD EPYC"
+    text = suite_markdown(result, "suite")
+    assert "| 144 | 144 | - |" in text and "(AMD EPYC) |" not in text
+
+
 def _series_row(n, q, sets=()):
     return {"label": f"{n} across", "preset": "zhou-cyl-bottom", "case_dir": f"/nowhere/{n}",
             "sets": [f"mesh.cells_across={n}", *sets], "cells_across": n, "Q": q,

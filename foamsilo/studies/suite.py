@@ -1011,6 +1011,27 @@ def _targets_markdown(result: dict[str, Any]) -> list[str]:
     return [*lines, ""]
 
 
+def short_cpu(name: str) -> str:
+    """Return a processor's name without its marks ("Intel(R) Xeon(R) Processor": "Intel Xeon")."""
+    words = name.replace("(R)", "").replace("(TM)", "").split("@")[0].split()
+    return " ".join(w for w in words if w not in ("Processor", "CPU"))
+
+
+def _cpu_cell(rows: list[dict[str, Any]]) -> Callable[[dict[str, Any]], str]:
+    """Return a table's CPU-time cell: with its row's processor where the rows name several.
+
+    A CPU time is its machine's; rows of one table measured on different
+    processors are not comparable without saying which.
+    """
+    named = {r["cpu"] for r in rows if r.get("cpu")}
+
+    def cell(r: dict[str, Any]) -> str:
+        text = fmt(r.get("cpu_s"), ".0f")
+        return f"{text} ({short_cpu(r['cpu'])})" if len(named) > 1 and r.get("cpu") else text
+
+    return cell
+
+
 def _jobs(value: Any) -> str:
     # older reports hold the number of cases at a time
     return f"{value} cases at a time" if isinstance(value, int) else str(value)
@@ -1054,6 +1075,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "| spread | swing | recoveries | steps | CPU [s] |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
+        cpu = _cpu_cell(pre["rows"])
         for r in pre["rows"]:
             q = r.get("Q")
             lines.append(
@@ -1062,7 +1084,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 f"| {fmt(r.get('Q_dimensionless'), '.4f')} ({r['flow_rate_scale']}) "
                 f"| {fmt(r['Q_std'] / q if q and r.get('Q_std') is not None else None, '.2%')} "
                 f"| {fmt(r.get('Q_step_swing'), '.2%')} | {fmt(r.get('recoveries'), 'd')} "
-                f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('cpu_s'), '.0f')} |"
+                f"| {fmt(r.get('steps'), 'd')} | {cpu(r)} |"
             )
         lines += [""] + [f"* **{r['label']}**: {r['detail']}" for r in pre["rows"]
                          if r.get("detail")] + [""]  # fmt: skip
@@ -1091,6 +1113,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                 "| time error | wall [s] | CPU [s] | steps | recoveries |",
                 "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
             ]
+            cpu = _cpu_cell(data["rows"])
             for r in data["rows"]:
                 q, qe = r.get("Q"), r.get("Q_time_error")
                 # a rate that is not steady is no grid figure: said beside it
@@ -1104,7 +1127,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                     f"| {fmt(r.get('err_vs_law'), '+.1%')} "
                     f"| {fmt(qe / q if q and qe is not None else None, '.2%')} "
                     f"| {fmt(r.get('wall_s'), '.0f')} "
-                    f"| {fmt(r.get('cpu_s'), '.0f')} | {fmt(r.get('steps'), 'd')} "
+                    f"| {cpu(r)} | {fmt(r.get('steps'), 'd')} "
                     f"| {fmt(r.get('recoveries'), 'd')} |"
                 )
             lines += ["", _convergence_words(data.get("convergence")), ""]
