@@ -644,6 +644,9 @@ def _worker_main() -> int:
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(sys.stderr):  # PyFoam prints
         try:
+            # a first build of the solver is no part of the case's wall time
+            ensure_solver()
+            t0 = time.perf_counter()
             summary = run_case(spec)
             outcome = Outcome(spec, "ok", summary.as_json())
         except KeyboardInterrupt:
