@@ -131,9 +131,6 @@ class RunResult:
         The steps the solver took again with half the step because their outer
         iterations diverged (``run.max_step_retakes``): each one's start
         ``time``, ``detail``, failed ``delta_t`` and ``retake_delta_t``.
-    cpu
-        The processor the solver ran on (its model name; ``""`` if unknown):
-        what the CPU time was measured on.
     share_retakes
         The steps the solver took again at the same step with half the
         stress's divergence share because their outer iterations grew or the
@@ -141,6 +138,9 @@ class RunResult:
         ``numerics.outer_change_limit``): each one's start ``time``, ``growth``
         and ``change``, and ``failed`` (why) where that step failed and was taken as
         the whole share first took it.
+    cpu
+        The processor the solver ran on (its model name; ``""`` if unknown):
+        what the CPU time was measured on.
     """
 
     case: Path
