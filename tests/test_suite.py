@@ -490,10 +490,16 @@ def test_a_table_whose_rows_ran_on_several_processors_names_each_row_s():
               "commit": "abc", "wall_s": {}, "checks": []}  # fmt: skip
     text = suite_markdown(result, "suite")
     assert "| 72 | 72 (Intel Xeon) | - |" in text and "| 96 | 96 (AMD EPYC) | - |" in text
-    for r in rows:
+    # the time-step table alike
+    steps = [{"courant": c, "outcome": "steady", "Q": 0.03, "cpu_s": 10.0 / c, "cpu": cpu}
+             for c, cpu in ((0.5, "AMD EPYC"), (0.25, "Intel(R) Xeon(R) Processor"))]  # fmt: skip
+    result["time-step"] = {"scenes": [{"label": "a scene", "rows": steps}]}
+    text = suite_markdown(result, "suite")
+    assert "| 20 (AMD EPYC) |" in text and "| 40 (Intel Xeon) |" in text
+    for r in [*rows, *steps]:
         r["cpu"] = "AMD EPYC"
     text = suite_markdown(result, "suite")
-    assert "| 144 | 144 | - |" in text and "(AMD EPYC) |" not in text
+    assert "| 144 | 144 | - |" in text and "| 40 |" in text and "(AMD EPYC) |" not in text
 
 
 def _series_row(n, q, sets=()):

@@ -1237,6 +1237,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "| Δt median [s] | steps | recoveries | CPU [s] |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
+        cpu = _cpu_cell([r for scene in ts["scenes"] for r in scene["rows"]])
         for scene in ts["scenes"]:
             for r in scene["rows"]:
                 lines.append(
@@ -1245,7 +1246,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
                     f"| {fmt(r.get('spread'), '.2%')} | {fmt(r.get('Q_step_swing'), '.2%')} "
                     f"| {fmt(r.get('dt_median'), '.3g')} "
                     f"| {fmt(r.get('steps'), 'd')} | {fmt(r.get('recoveries'), 'd')} "
-                    f"| {fmt(r.get('cpu_s'), '.0f')} |"
+                    f"| {cpu(r)} |"
                 )
         lines.append("")
     lines += _targets_markdown(result)
