@@ -1256,7 +1256,14 @@ def build_parser() -> argparse.ArgumentParser:
         "issue 18's cost targets and the presets' default grids judged on its rows",
     )
     sp.add_argument("--quick", action="store_true", help="the reduced suite (bash scripts/test)")
-    sp.add_argument("--only", nargs="+", metavar="ENTRY", help="these entries only")
+    sp.add_argument(
+        "--only",
+        nargs="+",
+        metavar="ENTRY",
+        help="these entries only, or a part of one merged into the report in -o: "
+        "work-precision/SERIES, presets/PRESET, 'time-step/LABEL' (one scene of "
+        "suite.toml's [[time-step.cases]], quoted)",
+    )
     sp.add_argument(
         "--values",
         nargs="+",

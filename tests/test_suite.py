@@ -560,6 +560,60 @@ def test_some_rows_of_a_series_rerun_into_the_report_and_the_others_kept(tmp_pat
     assert [r["cells_across"] for r in saved["work-precision"][name]["rows"]][-1] == 192
 
 
+def test_one_time_step_scene_reruns_into_the_report_and_the_others_kept(tmp_path, monkeypatch):
+    """`--only "time-step/LABEL"`: that scene's cases run, in their places.
+
+    Its cases keep the directories they have in the whole entry (a rerun
+    overwrites no other scene's case), its rows replace the scene's earlier
+    ones, the other scenes stay in suite.toml's order, and the change of Q
+    against the default step is taken again on the new rows.
+    """
+    from foamsilo.studies import suite
+    from foamsilo.studies.cases import study_table
+
+    table = study_table("suite")["time-step"]
+    labels = suite.time_step_scenes()
+    first, label = labels[0], "planar silo (the preset), 104 across"
+    courants = next(e.get("courants", table["courants"]) for e in table["cases"]
+                    if e["label"] == label)  # fmt: skip
+    # its cases' places in the whole entry: after every case of the scenes before it
+    before = sum(len(e.get("courants", table["courants"]))
+                 for e in table["cases"][: labels.index(label)])  # fmt: skip
+
+    def scene(name, qs):
+        rows = [{"label": f"{name}, Courant {c:g}", "outcome": "steady", "Q": q, "Q_std": 0.0,
+                 "courant": c} for c, q in zip([0.5, 0.25], qs, strict=True)]  # fmt: skip
+        return {"label": name, "rows": rows}
+
+    old = {"time-step": {"scenes": [scene(label, [1.0, 1.0]), scene(first, [2.0, 1.0])]},
+           "wall_s": {"time-step": 60.0}, "commits": {"time-step": "abc1234"},
+           "jobs": "2 cases at a time", "machine": {"cpu": "Elsewhere CPU", "cores": 2}}  # fmt: skip
+    (tmp_path / "suite.json").write_text(json.dumps(old))
+    ran = []
+
+    def fake_rows(cases, work, jobs, limit, on_row=None, dirs=None):
+        ran.append(([c.label for c in cases], dirs, Path(work).name))
+        return [{"label": c.label, "outcome": "steady", "Q": 40.0 - i, "Q_std": 0.0}
+                for i, c in enumerate(cases)]  # fmt: skip
+
+    monkeypatch.setattr(suite, "run_rows", fake_rows)
+    result = suite.run_suite(False, tmp_path, tmp_path / "work",
+                             only=[f"time-step/{label}"], jobs=1)  # fmt: skip
+    assert ran == [([f"{label}, Courant {c:g}" for c in courants],
+                    [f"{before + i:02d}" for i in range(len(courants))], "time-step")]  # fmt: skip
+    scenes = result["time-step"]["scenes"]
+    assert [s["label"] for s in scenes] == [first, label]  # suite.toml's order
+    assert [r["Q"] for r in scenes[0]["rows"]] == [2.0, 1.0]  # the other scene kept
+    mine = scenes[1]["rows"]
+    assert [r["courant"] for r in mine] == courants
+    assert mine[1]["vs_default_step"] == pytest.approx(39.0 / 40.0 - 1)
+    assert result["commits"]["time-step"] == "abc1234"
+    assert f"time-step/{label}" in result["wall_s"]
+    # a scene suite.toml does not list is refused, with the ones it does
+    with pytest.raises(FoamsiloError, match=r"'time-step/nope'.*'time-step/planar silo, 64 acr"):
+        suite.run_suite(False, tmp_path, tmp_path / "work", only=["time-step/nope"])
+
+
 @pytest.mark.parametrize(
     ("only", "values", "match"),
     [

@@ -483,13 +483,25 @@ def cap_independence(
 
 
 # ------------------------------------------------------------------ time step
+def time_step_scenes() -> list[str]:
+    """Return the labels of the time-step entry's scenes (``suite.toml`` [[time-step.cases]])."""
+    return [e["label"] for e in study_table("suite")["time-step"]["cases"]]
+
+
 def time_step_independence(
-    quick: bool, work: Path, jobs: Jobs, limit: float, on_row: OnRow = None
+    quick: bool,
+    work: Path,
+    jobs: Jobs,
+    limit: float,
+    on_row: OnRow = None,
+    only: str | None = None,
 ) -> dict[str, Any]:
     """Each scene at a fixed mesh and several Courant limits (``suite.toml`` [time-step]).
 
     Both the all-cell and the free-surface limit take each value; the first
-    value of a scene is its reference. Not part of the quick suite.
+    value of a scene is its reference. Not part of the quick suite. ``only``
+    (a scene's label) runs that scene alone, its cases in the directories
+    they have in the whole entry.
     """
     table = study_table("suite")["time-step"]
     if quick:
@@ -503,13 +515,17 @@ def time_step_independence(
         for e, courants in plan
         for c in courants
     ]  # fmt: skip
-    it = iter(run_rows(cases, work / "time-step", jobs, limit, on_row))
+    mine = [only is None or e["label"] == only for e, courants in plan for _ in courants]
+    plan = [(e, courants) for e, courants in plan if only is None or e["label"] == only]
+    dirs = [f"{i:02d}" for i, m in enumerate(mine) if m]
+    cases = [c for c, m in zip(cases, mine, strict=True) if m]
+    it = iter(run_rows(cases, work / "time-step", jobs, limit, on_row, dirs=dirs))
     scenes = []
     for e, courants in plan:
-        mine = [next(it) for _ in courants]
-        for r, c in zip(mine, courants, strict=True):
+        rows = [next(it) for _ in courants]
+        for r, c in zip(rows, courants, strict=True):
             r["courant"] = c
-        scenes.append({"label": e["label"], "rows": mine})
+        scenes.append({"label": e["label"], "rows": rows})
     out = {"scenes": scenes}
     derive_time_step(out)
     return out
@@ -705,10 +721,14 @@ def run_suite(
     from foamsilo.scene import preset_names
 
     names = only or list(ENTRIES)
-    # "work-precision/NAME" (one series) or "presets/NAME" (one preset): a part
-    # of an entry, merged into the others
+    # "work-precision/NAME" (one series), "presets/NAME" (one preset) or
+    # "time-step/LABEL" (one scene): a part of an entry, merged into the others
     split = [(n.partition("/")[0], n.partition("/")[2]) for n in names]
-    parts = {"work-precision": work_precision_series(), "presets": preset_names()}
+    parts = {
+        "work-precision": work_precision_series(),
+        "presets": preset_names(),
+        "time-step": time_step_scenes(),
+    }
     bad = [
         f"{n}/{sub}" if sub else n
         for n, sub in split
@@ -722,6 +742,8 @@ def run_suite(
             + ", ".join(f"work-precision/{k}" for k in parts["work-precision"])
             + "; or one preset: "
             + ", ".join(f"presets/{k}" for k in parts["presets"])
+            + "; or one time-step scene: "
+            + ", ".join(f"'time-step/{k}'" for k in parts["time-step"])
         )
     if values is not None and (len(split) != 1 or split[0][0] != "work-precision"
                                or not split[0][1]):  # fmt: skip
@@ -752,6 +774,12 @@ def run_suite(
             rows = {r["label"]: r for r in (result.get(name) or {}).get("rows", [])}
             rows.update({r["label"]: r for r in part["rows"]})
             result[name] = {"rows": [rows[k] for k in sorted(rows)]}
+            key = f"{name}/{sub}"
+        elif sub and name == "time-step":
+            part = time_step_independence(quick, Path(work_dir) / name, jobs, limit, on_row,
+                                          only=sub)  # fmt: skip
+            result[name] = {"scenes": _merged_scenes(result.get(name), part["scenes"])}
+            derive_time_step(result[name])
             key = f"{name}/{sub}"
         elif sub:
             earlier = (result.get(name) or {}).get(sub)
@@ -786,6 +814,20 @@ def run_suite(
     every = {c for v in commits.values() if v for c in str(v).split(", ")}
     result["commit"] = ", ".join(sorted(every))
     return write_report(result, out_dir, stem)
+
+
+def _merged_scenes(
+    earlier: dict[str, Any] | None, new: list[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """Return the time-step entry's scenes, ``new`` in place of theirs, in suite.toml's order.
+
+    A scene no longer in suite.toml keeps its place after the listed ones.
+    """
+    by_label = {s["label"]: s for s in (earlier or {}).get("scenes", [])}
+    by_label.update({s["label"]: s for s in new})
+    order = time_step_scenes()
+    listed = [by_label[k] for k in order if k in by_label]
+    return listed + [s for k, s in by_label.items() if k not in order]
 
 
 def _joined(*words: str | None) -> str | None:
