@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -291,6 +293,65 @@ def test_the_orifice_edge_is_refined_only_on_graded_meshes():
         load_preset("venier-test2", ["mesh.orifice_edge_refinement=4"])  # eccentric, uniform
     with pytest.raises(SceneError, match=r"mesh\.orifice_edge_refinement"):
         load_preset("zhou-cyl-bottom", ["mesh.growth_rate=1.1", "mesh.orifice_edge_refinement=0.5"])
+
+
+@pytest.mark.parametrize("preset", ["zhou-planar", "zhou-cyl-bottom", "venier-test1"])
+@pytest.mark.parametrize(
+    ("growth", "region", "n"),
+    [(1.1, 1.0, 24), (1.1, 1.0, 48), (1.1, 1.0, 96), (1.1, 1.0, 192),
+     (1.2, 0.5, 96), (1.2, 0.5, 192)],
+)  # fmt: skip
+@pytest.mark.parametrize("k", [2.0, 4.0])
+def test_the_exit_rows_grow_smoothly_from_h_over_k_at_the_floor(preset, growth, region, n, k):
+    base = [f"mesh.cells_across={n}", f"mesh.growth_rate={growth}",
+            f"mesh.orifice_region={region}"]  # fmt: skip
+    scene = load_preset(preset, [*base, f"mesh.orifice_exit_refinement={k}"])
+    plain = vertical_rows(load_preset(preset, base))
+    rows = vertical_rows(scene)
+    h, s = scene.cell_size, scene.silo
+    heights = []
+    for row in rows:
+        w = [row.ratio**j for j in range(row.n)]
+        heights += [(row.y1 - row.y0) * c / sum(w) for c in w]
+    hs = np.array(heights)
+    assert sum(hs) == pytest.approx(s.height, rel=1e-12)
+    # the floor's row is h / k high (to the 15% that fit the band of growing
+    # rows into whole cells of h), none lower
+    assert hs[0] == pytest.approx(h / k, rel=0.15) and hs.min() >= h / k * 0.95
+    # they grow by at most the growth rate a row within a band; where the
+    # growing band meets the graded rows above, its last row (about h / g)
+    # meets their first (about h g)
+    steps = hs[1:] / hs[:-1]
+    assert np.all(np.maximum(steps, 1 / steps) <= max(1.3, growth**2 * 1.01))
+    # no row of the orifice region higher than h; above it the unrefined rows,
+    # unless the region was too low for the whole growth and took its height
+    top = plain[0].y1
+    region_rows = hs[np.cumsum(hs) <= top * (1 + 1e-9)]
+    assert region_rows.max() <= h * (1 + 1e-9)
+
+    def above(rs, y):
+        return [(r.n, round(r.ratio, 9), round(r.y1, 12)) for r in rs if r.y0 >= y - 1e-9]
+
+    widened = next(r.y0 for r in rows if r.y0 >= top - 1e-9) > top + 1e-9
+    assert widened or above(rows, top) == above(plain, top)
+    assert not widened or n <= 48  # only coarse grids lack the room
+    # at most a few rows more than without the refinement
+    assert (
+        0 < sum(r.n for r in rows) - sum(r.n for r in plain) <= 2 * math.log(k) / math.log(growth)
+    )
+
+
+def test_the_exit_rows_are_refined_only_on_graded_meshes_of_a_bottom_orifice():
+    from foamsilo.errors import SceneError
+
+    match = r"mesh\.orifice_exit_refinement.*allowed here: 1"
+    with pytest.raises(SceneError, match=match):
+        lab_silo(72, **{"mesh.orifice_exit_refinement": 2})  # uniform
+    with pytest.raises(SceneError, match=match):
+        load_preset("zhou-rect-lateral", ["mesh.growth_rate=1.1",
+                                          "mesh.orifice_exit_refinement=2"])  # fmt: skip
+    with pytest.raises(SceneError, match=r"mesh\.orifice_exit_refinement.*>= 1"):
+        load_preset("zhou-cyl-bottom", ["mesh.orifice_exit_refinement=0.5"])
 
 
 @pytest.mark.parametrize("preset", ["zhou-cyl-lateral", "zhou-cyl-lateral-rect"])

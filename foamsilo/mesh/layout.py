@@ -277,12 +277,28 @@ def similar_grading(
 
 
 def _graded_rows(scene: Scene) -> list[Row]:
-    """Rows of a graded mesh: square cells up to ``mesh.orifice_region`` D, then growing."""
+    """Rows of a graded mesh: square cells up to ``mesh.orifice_region`` D, then growing.
+
+    With ``mesh.orifice_exit_refinement`` k > 1 the rows of the orifice region
+    grow from h / k at the floor to h (:func:`edge_bands`), as the columns do
+    from an orifice edge.
+    """
     s, h, me = scene.silo, scene.cell_size, scene.mesh
     if s.orifice_position == "lateral":
         return _lateral_graded_rows(scene)
     y_f = min(s.height, max(h, round(me.orifice_region * s.orifice_width / h) * h))
-    rows = [Row(0.0, y_f, max(1, round(y_f / h)))]
+    k = me.orifice_exit_refinement
+    # a region too low for the whole growth from h / k takes the growth's
+    # height, as an edge's region its width (edge_region)
+    grow = edge_bands(10 * (s.width / 2), h, k, me.growth_rate)
+    if len(grow) > 1 and y_f < grow[0][0] + h:
+        y_f = min(s.height, grow[0][0])
+    bands = edge_bands(y_f, h, k, me.growth_rate)
+    rows, y = [], 0.0
+    for i, (span, n, r) in enumerate(bands):
+        y1 = y_f if i == len(bands) - 1 else y + span  # the region's top exactly
+        rows.append(Row(y, y1, n, r))
+        y = y1
     headspace = (s.height - s.fill_height) / (HEADSPACE_CELLS * h)
     y = y_f
     for span, n, r in graded_segments(

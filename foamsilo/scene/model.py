@@ -398,6 +398,16 @@ class Mesh:
         le=32,
         default=1.0,
     )
+    orifice_exit_refinement: float = _f(
+        "graded mesh, bottom orifice: the rows at the floor (the orifice's exit) are this "
+        "many times lower than the orifice's cells, and grow by at most growth_rate per cell "
+        "to them upwards (the grains leave through the exit row; the step shrinks with it; "
+        "1: no refinement)",
+        "",
+        ge=1,
+        le=8,
+        default=1.0,
+    )
     coarse_cells_across: int = _f(
         "graded mesh: the largest cells are L / coarse_cells_across wide and tall (never "
         "smaller than the orifice's cells; capped so that the headspace keeps two cells)",

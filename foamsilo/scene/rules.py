@@ -101,6 +101,15 @@ def validate(scene: Scene) -> None:
             "meshes (mesh.growth_rate > 1, which names where they are built; this scene: "
             f"{scene.representation}, growth rate {me.growth_rate:g}); allowed here: 1",
         )
+    if me.orifice_exit_refinement > 1.0 + 1e-12 and (
+        not me.graded or s.orifice_position != "bottom"
+    ):
+        raise SceneError(
+            "mesh.orifice_exit_refinement",
+            f"got {me.orifice_exit_refinement:g}: the exit rows are refined on graded meshes "
+            "of a bottom orifice (mesh.growth_rate > 1; this scene: "
+            f"{s.orifice_position} orifice, growth rate {me.growth_rate:g}); allowed here: 1",
+        )
     if me.fine_height is not None and me.fine_height >= s.height:
         raise SceneError(
             "mesh.fine_height",
