@@ -560,6 +560,25 @@ def test_some_rows_of_a_series_rerun_into_the_report_and_the_others_kept(tmp_pat
     assert [r["cells_across"] for r in saved["work-precision"][name]["rows"]][-1] == 192
 
 
+def test_a_rerun_records_the_commit_its_cases_ran_at(tmp_path, monkeypatch):
+    """A commit made while the cases run is not theirs: the one before is recorded."""
+    from foamsilo.studies import suite
+
+    commits = iter(["abc1234", "fed4321"])
+    monkeypatch.setattr(suite, "git_commit", lambda: next(commits))
+
+    def fake(quick, work, jobs, limit, on_row=None, only=None):
+        suite.git_commit()  # a commit made while the case runs (read here)
+        return {"rows": [{"label": only, "preset": only, "outcome": "steady", "Q": 1.0,
+                          "Q_std": 0.0, "representation": "planar", "scheme": "lagged",
+                          "flow_rate_scale": "rho sqrt(g L^3)"}]}  # fmt: skip
+
+    monkeypatch.setattr(suite, "presets", fake)
+    result = suite.run_suite(False, tmp_path, tmp_path / "work", only=["presets/zhou-planar"],
+                             jobs=1)  # fmt: skip
+    assert result["commits"]["presets/zhou-planar"] == "abc1234"
+
+
 def test_one_time_step_scene_reruns_into_the_report_and_the_others_kept(tmp_path, monkeypatch):
     """`--only "time-step/LABEL"`: that scene's cases run, in their places.
 

@@ -767,6 +767,9 @@ def run_suite(
         k: result["machine"]["cpu"] for k in timing if "machine" in result
     }
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs_words(jobs)})
+    # the commit the cases run at: read before they run (a commit made while
+    # they run is not theirs)
+    at = git_commit()
     for name, sub in split:
         t0 = time.perf_counter()
         if sub and name == "presets":
@@ -799,12 +802,12 @@ def run_suite(
             # some rows added: the series' other rows keep where, how and
             # from which commit they ran
             timing[key] = timing.get(key, 0.0) + spent
-            commits[key] = _joined(commits.get(key), git_commit())
+            commits[key] = _joined(commits.get(key), at)
             ran_as[key] = _joined(ran_as.get(key), result["jobs"])
             cpu_of[key] = _joined(cpu_of.get(key), result["machine"]["cpu"])
         else:
             timing[key] = spent
-            commits[key] = git_commit()
+            commits[key] = at
             ran_as[key] = result["jobs"]
             cpu_of[key] = result["machine"]["cpu"]
     result["wall_s"] = timing
