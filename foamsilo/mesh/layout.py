@@ -286,13 +286,9 @@ def _graded_rows(scene: Scene) -> list[Row]:
     s, h, me = scene.silo, scene.cell_size, scene.mesh
     if s.orifice_position == "lateral":
         return _lateral_graded_rows(scene)
-    y_f = min(s.height, max(h, round(me.orifice_region * s.orifice_width / h) * h))
+    # the region's height as an edge's region's width, the silo's height its room
     k = me.orifice_exit_refinement
-    # a region too low for the whole growth from h / k takes the growth's
-    # height, as an edge's region its width (edge_region)
-    grow = edge_bands(10 * (s.width / 2), h, k, me.growth_rate)
-    if len(grow) > 1 and y_f < grow[0][0] + h:
-        y_f = min(s.height, grow[0][0])
+    y_f = edge_region(scene, room=s.height, k=k)
     bands = edge_bands(y_f, h, k, me.growth_rate)
     rows, y = [], 0.0
     for i, (span, n, r) in enumerate(bands):

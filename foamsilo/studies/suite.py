@@ -515,11 +515,12 @@ def time_step_independence(
         for e, courants in plan
         for c in courants
     ]  # fmt: skip
-    mine = [only is None or e["label"] == only for e, courants in plan for _ in courants]
+    # one scene: its cases keep their places in the whole entry
+    scene_of = [e["label"] for e, courants in plan for _ in courants]
+    keep = [i for i, label in enumerate(scene_of) if only is None or label == only]
     plan = [(e, courants) for e, courants in plan if only is None or e["label"] == only]
-    dirs = [f"{i:02d}" for i, m in enumerate(mine) if m]
-    cases = [c for c, m in zip(cases, mine, strict=True) if m]
-    it = iter(run_rows(cases, work / "time-step", jobs, limit, on_row, dirs=dirs))
+    it = iter(run_rows([cases[i] for i in keep], work / "time-step", jobs, limit, on_row,
+                       dirs=[f"{i:02d}" for i in keep]))  # fmt: skip
     scenes = []
     for e, courants in plan:
         rows = [next(it) for _ in courants]
@@ -782,7 +783,6 @@ def run_suite(
             part = time_step_independence(quick, Path(work_dir) / name, jobs, limit, on_row,
                                           only=sub)  # fmt: skip
             result[name] = {"scenes": _merged_scenes(result.get(name), part["scenes"])}
-            derive_time_step(result[name])
             key = f"{name}/{sub}"
         elif sub:
             earlier = (result.get(name) or {}).get(sub)
