@@ -47,10 +47,13 @@ PLANAR_UNIFORM_ARGS = tuple(a for s in PLANAR_UNIFORM for a in ("--set", s))
 #: uniform mesh (the coarse cells count where a test grades it), of 72 across
 #: where a test sets no cells across, and the whole stress divergence share
 #: with its step retakes (the preset is graded, with half the share, since
-#: issue 18); a test's own overrides come after them
+#: issue 18, its exit's rows refined since the evening of 2026-12-07); a
+#: test's own overrides come after them
 LAB_UNIFORM = (
     "mesh.growth_rate=1",
     "mesh.orifice_edge_refinement=1",
+    "mesh.orifice_exit_refinement=1",
+    "mesh.orifice_region=1",
     "mesh.coarse_cells_across=16",
 )
 LAB_UNIFORM_72 = ("mesh.cells_across=72", *LAB_UNIFORM)

@@ -720,11 +720,13 @@ MESH_KEYS = {"mesh.growth_rate", "mesh.orifice_edge_refinement", "mesh.orifice_r
 #: And the stress coupling's keys the lab silo's preset sets since 2026-12-07
 SHARE_KEYS = {"numerics.stress_pressure_divergence", "numerics.outer_growth_limit",
               "numerics.outer_change_limit"}  # fmt: skip
+#: And the exit's rows, which the lab silo's preset refines since 2026-12-07
+EXIT_KEYS = {"mesh.orifice_exit_refinement"}
 
 
 @pytest.mark.parametrize(
     ("preset", "keys", "least"),
-    [("zhou-planar", MESH_KEYS, 15), ("zhou-cyl-bottom", MESH_KEYS | SHARE_KEYS, 25)],
+    [("zhou-planar", MESH_KEYS, 15), ("zhou-cyl-bottom", MESH_KEYS | SHARE_KEYS | EXIT_KEYS, 25)],
 )
 def test_every_suite_case_on_a_graded_preset_names_its_grading(preset, keys, least):
     # the planar and lab silo presets are graded since issue 18 (the lab
@@ -756,7 +758,7 @@ def test_the_lab_silo_s_bench_and_verification_cases_name_its_former_defaults():
         for t in tables:
             named = set(t.get("set", {}))
             if t.get("law") != "pipe":  # the channel builds its own mesh
-                assert MESH_KEYS <= named, (study, t)
+                assert MESH_KEYS | EXIT_KEYS <= named, (study, t)
             assert SHARE_KEYS <= named, (study, t)
 
 

@@ -115,12 +115,13 @@ def test_the_hoppers_start_up_at_their_presets_grid_without_a_recovery(tmp_path,
 
 
 def test_the_lab_silo_starts_up_at_its_presets_grid_without_a_recovery(tmp_path, solver):
-    """The main job's silo at its default grid (96 across, edges refined 3x), 0.1 s.
+    """The main job's silo at its default grid (84 across, edges 3x, exit rows 4x), 0.1 s.
 
-    Its edges refined 4x instead, the same grid crashed in the start-up now
-    and then (a floating-point trap, by the written times alone: docs/solver.md,
-    "The lab silo's default grid"), which the runner recovers from t = 0;
-    at 3x it starts with neither a step retake nor a recovery allowed.
+    Its former grid (96 across) with its edges refined 4x instead of 3x
+    crashed in the start-up now and then (a floating-point trap, by the
+    written times alone: docs/solver.md, "The lab silo's default grid"),
+    which the runner recovers from t = 0; the preset's grid starts with
+    neither a step retake nor a recovery allowed.
     """
     # its first written time, as the preset writes it (the written times set
     # the steps that reach them)
@@ -128,5 +129,5 @@ def test_the_lab_silo_starts_up_at_its_presets_grid_without_a_recovery(tmp_path,
     spec = CaseSpec(tmp_path / "lab", "zhou-cyl-bottom", sets)
     (out,) = run_many([spec], Budget(cores=1))
     assert out.status == "ok", out.error
-    assert out.summary is not None and out.summary["cells_across"] == 96
+    assert out.summary is not None and out.summary["cells_across"] == 84
     assert out.summary["run"]["recoveries"] == [] and out.summary["run"]["step_retakes"] == []

@@ -114,6 +114,7 @@ def channel_scene(entry: dict[str, Any], channel: Channel, extra: Sequence[str] 
         "mesh.cells_across=8",
         "mesh.growth_rate=1.0",
         "mesh.orifice_edge_refinement=1.0",
+        "mesh.orifice_exit_refinement=1",
         f"silo.orifice_width={width / 4!r}",
         f"mesh.representation='{'planar' if plane else 'axisymmetric'}'",
         "gas.mode='open-top'",
