@@ -965,8 +965,9 @@ def cmd_bench_hopper(args: argparse.Namespace) -> int:
     from foamsilo.hopper.figures import plot_work_precision, work_precision, work_precision_markdown
     from foamsilo.studies.cases import git_commit, machine_info
 
+    commit = git_commit()  # before the runs: a commit made meanwhile is not theirs
     res = work_precision(cells=tuple(args.cells))
-    res["commit"], res["machine"] = git_commit(), machine_info()
+    res["commit"], res["machine"] = commit, machine_info()
     figure = Path(args.figure)
     figure.parent.mkdir(parents=True, exist_ok=True)
     plot_work_precision(res, figure)

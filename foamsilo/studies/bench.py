@@ -161,6 +161,8 @@ def bench_solver(
     progress
         The running case's progress (simulated time, ETA), as ``run_case`` takes it.
     """
+    # the commit the cases run at: one made while they run is not theirs
+    commit = git_commit()
     preset, base = defaults("solver")["preset"], overrides(defaults("solver").get("set"))
     of = find_openfoam()
     rows = []
@@ -210,7 +212,7 @@ def bench_solver(
         "end_time_s": end_time,
         "overrides": list(extra or []),
         "machine": machine_info(),
-        "commit": git_commit(),
+        "commit": commit,
         "rows": [asdict(r) for r in rows],
     }
 
@@ -289,6 +291,8 @@ def bench_gas(
     The cases of ``bench.toml`` [gas] (dry, Darcy, Darcy-Forchheimer), same
     mesh, run one after the other.
     """
+    # the commit the cases run at: one made while they run is not theirs
+    commit = git_commit()
     d = defaults("gas")
     of = find_openfoam()
     rows = {}
@@ -318,7 +322,7 @@ def bench_gas(
         "cells_across": cells,
         "end_time_s": end_time,
         "machine": machine_info(),
-        "commit": git_commit(),
+        "commit": commit,
         "rows": rows,
     }
 
@@ -346,6 +350,8 @@ def bench_mesh(targets: list[int], work_dir: Path, say: Say = _quiet) -> dict[st
     and checkMesh; peak memory is the largest resident set of that process and
     the programs it ran.
     """
+    # the commit the cases run at: one made while they run is not theirs
+    commit = git_commit()
     d = defaults("mesh")
     preset, sets = d["preset"], overrides(d["set"])
     rows = []
@@ -391,7 +397,7 @@ def bench_mesh(targets: list[int], work_dir: Path, say: Say = _quiet) -> dict[st
         "benchmark": "mesh",
         "preset": preset,
         "machine": machine_info(),
-        "commit": git_commit(),
+        "commit": commit,
         "rows": rows,
     }
 
@@ -462,6 +468,8 @@ def bench_mpi(
     ``repeats`` times, for the runner's overhead. Times are solver wall
     seconds per time step.
     """
+    # the commit the cases run at: one made while they run is not theirs
+    commit = git_commit()
     d = defaults("mpi")
     of = find_openfoam()
     solver = ensure_solver(of=of)
@@ -513,7 +521,7 @@ def bench_mpi(
     for p in (work_dir / "direct", work_dir / "runner", base):
         shutil.rmtree(p, ignore_errors=True)
     return {
-        **_record("mpi", preset, n, cells),
+        **_record("mpi", preset, n, cells, commit),
         "end_time_s": end_time,
         "rows": rows,
         "runner": overhead,
@@ -580,6 +588,8 @@ def bench_post(
     """
     from foamsilo.foam import reconstruct_par
 
+    # the commit the cases run at: one made while they run is not theirs
+    commit = git_commit()
     d = defaults("post")
     of = find_openfoam()
     preset = d["preset"]
@@ -620,7 +630,7 @@ def bench_post(
     cells = int(read_metadata(case).get("cells") or 0)
     shutil.rmtree(case, ignore_errors=True)
     return {
-        **_record("post", preset, n, cells),
+        **_record("post", preset, n, cells, commit),
         "ranks": ranks,
         "solver_wall_s": round(res.wall_seconds, 1),
         "steps": res.steps,
@@ -629,15 +639,17 @@ def bench_post(
     }
 
 
-def _record(name: str, preset: str, cells_across: int, cells: int) -> dict[str, Any]:
-    """Return the fields every 3D benchmark record starts with."""
+def _record(
+    name: str, preset: str, cells_across: int, cells: int, commit: str | None
+) -> dict[str, Any]:
+    """Return the fields every 3D benchmark record starts with (``commit``: before its runs)."""
     return {
         "benchmark": name,
         "preset": preset,
         "cells_across": cells_across,
         "cells": cells,
         "machine": machine_info(),
-        "commit": git_commit(),
+        "commit": commit,
     }
 
 
