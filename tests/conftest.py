@@ -57,6 +57,15 @@ LAB_UNIFORM = (
     "mesh.coarse_cells_across=16",
 )
 LAB_UNIFORM_72 = ("mesh.cells_across=72", *LAB_UNIFORM)
+#: The lab silo's graded mesh from the morning to the evening of 2026-12-07
+#: (growth 1.074, cells of L/21 at most, the fine region one D, edges 3x as
+#: now, the exit's rows not refined): for the tests measured on it
+LAB_GRADED_MORNING = (
+    "mesh.growth_rate=1.074",
+    "mesh.coarse_cells_across=21",
+    "mesh.orifice_region=1",
+    "mesh.orifice_exit_refinement=1",
+)
 LAB_WHOLE_SHARE = (
     "numerics.stress_pressure_divergence=1",
     "numerics.outer_growth_limit=2",

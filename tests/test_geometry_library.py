@@ -252,7 +252,8 @@ def test_a_graded_mesh_passes_checkmesh_and_grows_at_its_rate(preset, rep, tmp_p
 
     n = 24 if rep == "3d" else 48
     # the mesh keys' defaults but the growth (the planar preset's own grading differs)
-    grading = ["mesh.orifice_region=1.0", "mesh.orifice_edge_refinement=1.0"]
+    grading = ["mesh.orifice_region=1.0", "mesh.orifice_edge_refinement=1.0",
+               "mesh.orifice_exit_refinement=1"]  # fmt: skip
     scene = load_preset(
         preset,
         [
