@@ -965,7 +965,7 @@ def cmd_bench_hopper(args: argparse.Namespace) -> int:
     from foamsilo.hopper.figures import plot_work_precision, work_precision, work_precision_markdown
     from foamsilo.studies.cases import git_commit, machine_info
 
-    commit = git_commit()  # before the runs: a commit made meanwhile is not theirs
+    commit = git_commit()  # before the runs (git_commit)
     res = work_precision(cells=tuple(args.cells))
     res["commit"], res["machine"] = commit, machine_info()
     figure = Path(args.figure)

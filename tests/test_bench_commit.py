@@ -10,34 +10,20 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-import pytest
 
-
-@pytest.fixture
-def commits(monkeypatch):
-    """``git_commit`` answering abc1234 first, then fed4321 (a commit made meanwhile)."""
+def test_the_solver_benchmark_records_the_commit_read_before_its_runs(monkeypatch, tmp_path):
     from foamsilo.studies import bench
 
-    answers = iter(["abc1234", "fed4321", "fed4321"])
-    monkeypatch.setattr(bench, "git_commit", lambda: next(answers))
-    return bench
-
-
-def _summary(case):
+    commits = iter(["abc1234", "fed4321"])
+    monkeypatch.setattr(bench, "git_commit", lambda: next(commits))
     run = {"end_time": 0.1, "start_time": 0.0, "steps": 10, "cpu_seconds": 1.0,
            "wall_seconds": 1.0, "max_rss_mb": 1.0}  # fmt: skip
-    return SimpleNamespace(case=case, as_json=lambda: {
-        "cells": 100, "run": run, "Q_dimensionless": 0.16,
-        "Q_from_volume_dimensionless": 0.16, "mass_balance_rel_error": 0.0})  # fmt: skip
-
-
-def test_the_solver_benchmark_records_the_commit_read_before_its_runs(commits, monkeypatch,
-                                                                       tmp_path):  # fmt: skip
-    bench = commits
+    summary = {"cells": 100, "run": run, "Q_dimensionless": 0.16,
+               "Q_from_volume_dimensionless": 0.16, "mass_balance_rel_error": 0.0}  # fmt: skip
 
     def fake_run_case(spec, of=None, progress=None):
         bench.git_commit()  # a commit made while the case runs (read here)
-        return _summary(spec.case_dir)
+        return SimpleNamespace(case=spec.case_dir, as_json=lambda: summary)
 
     monkeypatch.setattr(bench, "run_case", fake_run_case)
     monkeypatch.setattr(bench, "find_openfoam", lambda: None)

@@ -161,8 +161,7 @@ def bench_solver(
     progress
         The running case's progress (simulated time, ETA), as ``run_case`` takes it.
     """
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     preset, base = defaults("solver")["preset"], overrides(defaults("solver").get("set"))
     of = find_openfoam()
     rows = []
@@ -291,8 +290,7 @@ def bench_gas(
     The cases of ``bench.toml`` [gas] (dry, Darcy, Darcy-Forchheimer), same
     mesh, run one after the other.
     """
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     d = defaults("gas")
     of = find_openfoam()
     rows = {}
@@ -350,8 +348,7 @@ def bench_mesh(targets: list[int], work_dir: Path, say: Say = _quiet) -> dict[st
     and checkMesh; peak memory is the largest resident set of that process and
     the programs it ran.
     """
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     d = defaults("mesh")
     preset, sets = d["preset"], overrides(d["set"])
     rows = []
@@ -468,8 +465,7 @@ def bench_mpi(
     ``repeats`` times, for the runner's overhead. Times are solver wall
     seconds per time step.
     """
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     d = defaults("mpi")
     of = find_openfoam()
     solver = ensure_solver(of=of)
@@ -588,8 +584,7 @@ def bench_post(
     """
     from foamsilo.foam import reconstruct_par
 
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     d = defaults("post")
     of = find_openfoam()
     preset = d["preset"]

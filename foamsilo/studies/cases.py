@@ -261,7 +261,11 @@ def machine_info() -> dict[str, Any]:
 
 
 def git_commit() -> str | None:
-    """Return the commit the studies ran at (``-dirty``: uncommitted changes to the code)."""
+    """Return the commit the studies ran at (``-dirty``: uncommitted changes to the code).
+
+    A study reads it before its runs: a commit made while they run is not the
+    code they ran.
+    """
     import os
 
     from foamsilo.process import run_command

@@ -59,8 +59,7 @@ def zhou_gas(
     """Run the sweep of Zhou sec. III.B and write figures and a report."""
     from foamsilo.scene import load_preset
 
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     table = study_table("validation")["zhou-gas"]
     preset = table["preset"]
     base = [f"mesh.cells_across={cells}"] + ([f"run.end_time={end_time}"] if end_time else [])
@@ -346,8 +345,7 @@ def gas_extremes(
     """Stiff and extreme gas cases in the rectangular lab silo; report each outcome."""
     from foamsilo.scene import load_preset
 
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     table = study_table("validation")["gas-extremes"]
     base = [f"mesh.cells_across={cells}"]
     cases = [

@@ -768,9 +768,7 @@ def run_suite(
         k: result["machine"]["cpu"] for k in timing if "machine" in result
     }
     result.update({"quick": quick, "machine": machine_info(), "jobs": jobs_words(jobs)})
-    # the commit the cases run at: read before they run (a commit made while
-    # they run is not theirs)
-    at = git_commit()
+    at = git_commit()  # before the runs (git_commit)
     for name, sub in split:
         t0 = time.perf_counter()
         if sub and name == "presets":

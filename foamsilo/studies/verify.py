@@ -337,8 +337,7 @@ def run_verification(
     report is ``verification-set``, so that the checked-in one stays the
     defaults'.
     """
-    # the commit the cases run at: one made while they run is not theirs
-    commit = git_commit()
+    commit = git_commit()  # before the runs (git_commit)
     table = entries()
     names = only or list(table)
     bad = [n for n in names if n not in table]
