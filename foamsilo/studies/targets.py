@@ -13,6 +13,10 @@ recomputed from ``suite.json`` whenever the report is written.
 Verdicts: ``met`` (measured within the limit), ``missed`` (measured or
 projected beyond it), ``not shown`` (no measured grid reaches the level and no
 projection says it misses, or the series did not run).
+
+A measured grid is within a level only with its rate's time-averaging band
+(:func:`band`, the 95% half-width the reports give) inside it: a margin
+smaller than what averaging leaves unknown does not show the grid is there.
 """
 
 from __future__ import annotations
@@ -67,6 +71,18 @@ class Verdict:
     value: float | None
     verdict: str
     detail: str
+
+
+def band(row: Row) -> float:
+    """Return a row's 95% time-averaging half-width over its Q (0 where not measured).
+
+    Two standard errors of the batch-means estimate, the time part of
+    :func:`foamsilo.post.grid.combined_uncertainty`.
+    """
+    q, se = row.get("Q"), row.get("Q_time_error")
+    if not q or se is None or not math.isfinite(se):
+        return 0.0
+    return 2.0 * float(se) / abs(float(q))
 
 
 def cost_fit(rows: list[Row]) -> tuple[float, float] | None:
@@ -154,7 +170,7 @@ def _resolution(
         return None
     refs = refs or [g.extrapolated]
     steady = family(data["rows"])
-    errs = [max(abs(r["Q"] / e - 1) for e in refs) for r in steady]
+    errs = [max(abs(r["Q"] / e - 1) for e in refs) + band(r) for r in steady]
     n = coarsest_within([r["cells_across"] for r in steady], errs, level)
     if n is not None:
         row = next(r for r in steady if r["cells_across"] == n)
@@ -260,7 +276,8 @@ def _wall_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     errs = [max((r["Q"] / q - 1 for q, _ in refs), key=abs) for r in steady]
     table = ", ".join(f"{r['cells_across']} across {e:+.1%} ({r['wall_s'] / 60:.1f} min)"
                       for r, e in zip(steady, errs, strict=True))  # fmt: skip
-    n = coarsest_within([r["cells_across"] for r in steady], errs, level)
+    n = coarsest_within([r["cells_across"] for r in steady],
+                        [abs(e) + band(r) for r, e in zip(steady, errs, strict=True)], level)  # fmt: skip
     detail = f"against the farthest of {'; '.join(w for _, w in refs)}: {table}"
     if n is None:
         return None, "not shown", f"no grid within {level:.0%}; {detail}"
@@ -395,9 +412,10 @@ def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[d
             src = "the preset's run" if run is not None else "measured"
             how = f"{src}, against the farthest of {len(refs)} extrapolations"
             how += f" (also {', '.join(also)})"
-        row.update(level=level, error=err, how=f"{ask['series']}, {how}",
+        measured = grid_q or next((r for r in data["rows"] if r["cells_across"] == cells), {})
+        row.update(level=level, error=err, band=band(measured), how=f"{ask['series']}, {how}",
                    needed=_needed(ask["series"], data, level, refs))  # fmt: skip
-        row["within"] = None if err is None else abs(err) <= level
+        row["within"] = None if err is None else abs(err) + row["band"] <= level
         out.append(row)
     return out
 
