@@ -254,3 +254,30 @@ def test_a_finest_row_without_a_steady_rate_is_no_reference():
     assert data["rows"][4]["err_vs_finest"] is None
     # 0.5/16 - 0.5/64 = 2.3% > 2%, 0.5/32 - 0.5/64 = 0.78%
     assert (data["recommend_5pct"], data["recommend_2pct"]) == (16, 32)
+
+
+def test_a_grid_is_within_a_level_only_with_its_time_averaging_band():
+    # first order, c = 0.5: 64 across is 0.78% low, within 1% by 0.22%. With a
+    # standard error of the time average of 0.1% of Q its 95% band (0.2%)
+    # still fits; with 0.15% (a band of 0.3%) it does not, and the next grid
+    # (128 across, 0.39% low) is the one within
+    for se, within, grid in ((0.001, True, 64), (0.0015, False, 128)):
+        wp = {"a": series([8, 16, 32, 64, 128], Q_time_error=se * Q_INF)}
+        (v,) = judge({"work-precision": wp}, {"targets": [cost_target(1e6, names=["a"])]})
+        assert f"a: {grid} across (measured)" in v.detail, (se, v.detail)
+        # the wall target: the same row against the same extrapolation
+        one = {"rows": [{**wp["a"]["rows"][3], "wall_s": 1.0}]}
+        t = {"name": "w", "kind": "wall", "what": "w", "why": "y", "series": ["one"],
+             "reference": ["a"], "level": 0.01, "limit": 10.0}  # fmt: skip
+        (v,) = judge({"work-precision": {"one": one, "a": wp["a"]}}, {"targets": [t]})
+        assert v.verdict == ("met" if within else "not shown"), (se, v)
+        # the preset's default grid, its row of the series 0.78% low
+        n = load_preset("zhou-planar").cells_across
+        wp = {"s": series([n // 4, n // 2, n, 2 * n], c=0.0078 * n,
+                          Q_time_error=se * Q_INF)}  # fmt: skip
+        rows = default_resolutions({"work-precision": wp},
+                                   {"zhou-planar": {"series": "s", "level": 0.01}})  # fmt: skip
+        (r,) = [r for r in rows if r["preset"] == "zhou-planar"]
+        assert r["error"] == pytest.approx(-0.0078, rel=1e-6)
+        assert r["band"] == pytest.approx(2 * se / (1 - 0.0078), rel=1e-6)
+        assert r["within"] is within, (se, r)

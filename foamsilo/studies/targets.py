@@ -276,8 +276,8 @@ def _wall_target(t: dict[str, Any], wp: dict[str, Any]) -> tuple[float | None, s
     errs = [max((r["Q"] / q - 1 for q, _ in refs), key=abs) for r in steady]
     table = ", ".join(f"{r['cells_across']} across {e:+.1%} ({r['wall_s'] / 60:.1f} min)"
                       for r, e in zip(steady, errs, strict=True))  # fmt: skip
-    n = coarsest_within([r["cells_across"] for r in steady],
-                        [abs(e) + band(r) for r, e in zip(steady, errs, strict=True)], level)  # fmt: skip
+    reach = [abs(e) + band(r) for r, e in zip(steady, errs, strict=True)]
+    n = coarsest_within([r["cells_across"] for r in steady], reach, level)
     detail = f"against the farthest of {'; '.join(w for _, w in refs)}: {table}"
     if n is None:
         return None, "not shown", f"no grid within {level:.0%}; {detail}"
@@ -412,7 +412,7 @@ def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[d
             src = "the preset's run" if run is not None else "measured"
             how = f"{src}, against the farthest of {len(refs)} extrapolations"
             how += f" (also {', '.join(also)})"
-        measured = grid_q or next((r for r in data["rows"] if r["cells_across"] == cells), {})
+        measured: Row = grid_q or next((r for r in data["rows"] if r["cells_across"] == cells), {})
         row.update(level=level, error=err, band=band(measured), how=f"{ask['series']}, {how}",
                    needed=_needed(ask["series"], data, level, refs))  # fmt: skip
         row["within"] = None if err is None else abs(err) + row["band"] <= level
