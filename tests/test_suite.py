@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from foamsilo.errors import FoamsiloError
+from foamsilo.scene import load_preset
 from foamsilo.studies.suite import _recommend, beverloo_fit, checks, derive_work_precision
 
 
@@ -612,8 +613,11 @@ def test_one_time_step_scene_reruns_into_the_report_and_the_others_kept(tmp_path
 
     def fake_rows(cases, work, jobs, limit, on_row=None, dirs=None):
         ran.append(([c.label for c in cases], dirs, Path(work).name))
+        limits.extend(load_preset(c.preset, c.sets).run for c in cases)
         return [{"label": c.label, "outcome": "steady", "Q": 40.0 - i, "Q_std": 0.0}
                 for i, c in enumerate(cases)]  # fmt: skip
+
+    limits = []
 
     monkeypatch.setattr(suite, "run_rows", fake_rows)
     result = suite.run_suite(False, tmp_path, tmp_path / "work",
@@ -625,6 +629,12 @@ def test_one_time_step_scene_reruns_into_the_report_and_the_others_kept(tmp_path
     assert [r["Q"] for r in scenes[0]["rows"]] == [2.0, 1.0]  # the other scene kept
     mine = scenes[1]["rows"]
     assert [r["courant"] for r in mine] == courants
+    # the preset as it runs: 0.75 over all cells, 0.5 at the free surface, both halved
+    assert [(r.max_courant, r.max_interface_courant) for r in limits] == [
+        (0.75, 0.5), (0.375, 0.25), (0.1875, 0.125)]  # fmt: skip
+    assert [r["interface_courant"] for r in mine] == [0.5, 0.25, 0.125]
+    assert (load_preset("zhou-planar").run.max_courant,
+            load_preset("zhou-planar").run.max_interface_courant) == (0.75, 0.5)  # fmt: skip
     assert mine[1]["vs_default_step"] == pytest.approx(39.0 / 40.0 - 1)
     assert result["commits"]["time-step"] == "abc1234"
     assert f"time-step/{label}" in result["wall_s"]

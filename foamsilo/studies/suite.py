@@ -498,8 +498,9 @@ def time_step_independence(
 ) -> dict[str, Any]:
     """Each scene at a fixed mesh and several Courant limits (``suite.toml`` [time-step]).
 
-    Both the all-cell and the free-surface limit take each value; the first
-    value of a scene is its reference. Not part of the quick suite. ``only``
+    Both the all-cell and the free-surface limit take each value (a scene's
+    ``interface_courants``, where given, the free-surface limit at each); the
+    first value of a scene is its reference. Not part of the quick suite. ``only``
     (a scene's label) runs that scene alone, its cases in the directories
     they have in the whole entry.
     """
@@ -511,9 +512,9 @@ def time_step_independence(
     cases = [
         StudyCase(f"{e['label']}, Courant {c:g}", e["preset"],
                   [*overrides(e.get("set")), f"run.max_courant={c!r}",
-                   f"run.max_interface_courant={c!r}"])
+                   f"run.max_interface_courant={i!r}"])
         for e, courants in plan
-        for c in courants
+        for c, i in zip(courants, _interface_courants(e, courants), strict=True)
     ]  # fmt: skip
     # one scene: its cases keep their places in the whole entry
     scene_of = [e["label"] for e, courants in plan for _ in courants]
@@ -524,12 +525,32 @@ def time_step_independence(
     scenes = []
     for e, courants in plan:
         rows = [next(it) for _ in courants]
-        for r, c in zip(rows, courants, strict=True):
+        for r, c, i in zip(rows, courants, _interface_courants(e, courants), strict=True):
             r["courant"] = c
+            r["interface_courant"] = i
         scenes.append({"label": e["label"], "rows": rows})
     out = {"scenes": scenes}
     derive_time_step(out)
     return out
+
+
+def _interface_courants(entry: dict[str, Any], courants: list[float]) -> list[float]:
+    """Return a time-step scene's free-surface Courant limits: its own, or its all-cell ones."""
+    given = entry.get("interface_courants")
+    if given is None:
+        return courants
+    if len(given) != len(courants):
+        raise ValueError(
+            f"suite.toml time-step {entry['label']!r}: interface_courants has {len(given)} "
+            f"values; allowed: one per Courant limit ({len(courants)})"
+        )
+    return [float(v) for v in given]
+
+
+def courant_words(row: dict[str, Any]) -> str:
+    """Return a time-step row's Courant limits: one value, or all cells / free surface."""
+    c, i = row["courant"], row.get("interface_courant", row["courant"])
+    return f"{c:g}" if i == c else f"{c:g} / {i:g}"
 
 
 def derive_time_step(data: dict[str, Any]) -> None:
@@ -696,9 +717,9 @@ def checks(result: dict[str, Any]) -> list[Check]:
     ts = result.get("time-step")
     if ts:
         for scene in ts["scenes"]:
-            first = scene["rows"][0]["courant"]
+            first = courant_words(scene["rows"][0])
             for r in scene["rows"][1:]:
-                name = f"{scene['label']}, Courant {r['courant']:g}: Q against Courant {first:g}"
+                name = f"{scene['label']}, Courant {courant_words(r)}: Q against Courant {first}"
                 out.append(check("time-step", name, r.get("vs_default_step")))
     return out
 
@@ -1275,7 +1296,8 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
             "## Q against the time step",
             "",
             "Each scene on a fixed mesh at its default Courant limits (0.5) and at smaller "
-            "ones (the all-cell and the free-surface limit both set to the value). "
+            "ones (the all-cell and the free-surface limit both set to the value; two "
+            "values: all cells / free surface). "
             "Spread: the standard deviation of the instantaneous rate in the steady "
             "window over Q; swing: the part of it that changes from one step to the next "
             "(`Q_step_swing`; above 1% the report warns: a numerical oscillation).",
@@ -1288,7 +1310,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         for scene in ts["scenes"]:
             for r in scene["rows"]:
                 lines.append(
-                    f"| {scene['label']} | {r['courant']:g} | {r['outcome']} "
+                    f"| {scene['label']} | {courant_words(r)} | {r['outcome']} "
                     f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('vs_default_step'), '+.2%')} "
                     f"| {fmt(r.get('spread'), '.2%')} | {fmt(r.get('Q_step_swing'), '.2%')} "
                     f"| {fmt(r.get('dt_median'), '.3g')} "
