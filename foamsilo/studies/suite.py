@@ -1295,9 +1295,9 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         lines += [
             "## Q against the time step",
             "",
-            "Each scene on a fixed mesh at its default Courant limits (0.5) and at smaller "
-            "ones (the all-cell and the free-surface limit both set to the value; two "
-            "values: all cells / free surface). "
+            "Each scene on a fixed mesh at its default Courant limits (its first row) and "
+            "at smaller ones (the all-cell and the free-surface limit both set to the "
+            "value; two values: all cells / free surface). "
             "Spread: the standard deviation of the instantaneous rate in the steady "
             "window over Q; swing: the part of it that changes from one step to the next "
             "(`Q_step_swing`; above 1% the report warns: a numerical oscillation).",
