@@ -803,3 +803,16 @@ def test_a_worker_s_wall_time_leaves_out_a_first_build_of_the_solver(monkeypatch
     assert pipeline._worker_main() == 0
     outcome = json.loads(out.getvalue())
     assert outcome["status"] == "ok" and outcome["wall_s"] < 0.5
+
+
+def test_a_series_grid_is_within_a_level_only_with_its_time_band_inside():
+    # first order to 2.0, c = 0.5: 64 across is 0.78% low. With a standard
+    # error of 0.15% of Q its 95% band (0.3%) takes it past 1%: the series'
+    # 1% grid is then 128 across (0.39% low), as in the targets
+    for se, grid in ((0.0, 64), (0.0015, 128)):
+        rows = [{"cells_across": n, "Q": 2.0 * (1 - 0.5 / n), "outcome": "steady",
+                 "Q_time_error": se * 2.0} for n in (8, 16, 32, 64, 128)]  # fmt: skip
+        data = {"rows": rows, "Q_law": None}
+        derive_work_precision(data)
+        assert data["convergence"]["extrapolated"] == pytest.approx(2.0, rel=1e-9)
+        assert data["convergence"]["coarsest_within_1pct"] == grid, se

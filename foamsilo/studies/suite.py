@@ -76,7 +76,14 @@ from foamsilo.studies.cases import (
     summary_fields,
     wall_limits,
 )
-from foamsilo.studies.targets import as_dicts, cost_fit, default_resolutions, family, judge
+from foamsilo.studies.targets import (
+    as_dicts,
+    band,
+    cost_fit,
+    default_resolutions,
+    family,
+    judge,
+)
 
 Row = dict[str, Any]
 OnRow = Callable[[Row], None] | None
@@ -262,7 +269,7 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     the cells across, to project the cost of the 2% and 1% resolutions.
     Recomputed when the report is written again from ``suite.json``.
     """
-    from foamsilo.post.convergence import grid_convergence
+    from foamsilo.post.convergence import coarsest_within, grid_convergence
 
     rows = data["rows"]
     # the finest row with a steady rate: a finer one that found none is no reference
@@ -290,6 +297,10 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     if g.extrapolated is not None:
         for r in steady:
             r["err_vs_extrapolated"] = r["Q"] / g.extrapolated - 1
+        # a measured grid is within a level with its time band inside it (as the targets)
+        reach = [abs(r["err_vs_extrapolated"]) + band(r) for r in steady]
+        for key, level in (("2pct", 0.02), ("1pct", 0.01)):
+            conv[f"coarsest_within_{key}"] = coarsest_within(g.cells, reach, level)
     fit = cost_fit(steady)
     if fit is not None:
         k, lnc0 = fit
@@ -547,7 +558,7 @@ def _interface_courants(entry: dict[str, Any], courants: list[float]) -> list[fl
     return [float(v) for v in given]
 
 
-def courant_words(row: dict[str, Any]) -> str:
+def _courant_words(row: dict[str, Any]) -> str:
     """Return a time-step row's Courant limits: one value, or all cells / free surface."""
     c, i = row["courant"], row.get("interface_courant", row["courant"])
     return f"{c:g}" if i == c else f"{c:g} / {i:g}"
@@ -717,9 +728,9 @@ def checks(result: dict[str, Any]) -> list[Check]:
     ts = result.get("time-step")
     if ts:
         for scene in ts["scenes"]:
-            first = courant_words(scene["rows"][0])
+            first = _courant_words(scene["rows"][0])
             for r in scene["rows"][1:]:
-                name = f"{scene['label']}, Courant {courant_words(r)}: Q against Courant {first}"
+                name = f"{scene['label']}, Courant {_courant_words(r)}: Q against Courant {first}"
                 out.append(check("time-step", name, r.get("vs_default_step")))
     return out
 
@@ -1024,7 +1035,11 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
     for key, level in (("2pct", "2%"), ("1pct", "1%")):
         n, measured = conv[f"cells_for_{key}"], conv[f"coarsest_within_{key}"]
         cost = conv.get(f"cpu_per_simulated_s_for_{key}")
-        where = f"measured from {measured} across" if measured else "no measured grid"
+        where = (
+            f"measured from {measured} across (its rate's time band inside)"
+            if measured
+            else "no measured grid"
+        )
         proj = f"; the error model puts it at {n:.0f} across" if n is not None else ""
         if cost is not None:
             proj += (
@@ -1310,7 +1325,7 @@ def suite_markdown(result: dict[str, Any], stem: str) -> str:
         for scene in ts["scenes"]:
             for r in scene["rows"]:
                 lines.append(
-                    f"| {scene['label']} | {courant_words(r)} | {r['outcome']} "
+                    f"| {scene['label']} | {_courant_words(r)} | {r['outcome']} "
                     f"| {fmt(r.get('Q'), '.5g')} | {fmt(r.get('vs_default_step'), '+.2%')} "
                     f"| {fmt(r.get('spread'), '.2%')} | {fmt(r.get('Q_step_swing'), '.2%')} "
                     f"| {fmt(r.get('dt_median'), '.3g')} "
