@@ -611,13 +611,13 @@ def test_one_time_step_scene_reruns_into_the_report_and_the_others_kept(tmp_path
     (tmp_path / "suite.json").write_text(json.dumps(old))
     ran = []
 
+    limits = []  # each case's run settings, as its scene loads them
+
     def fake_rows(cases, work, jobs, limit, on_row=None, dirs=None):
         ran.append(([c.label for c in cases], dirs, Path(work).name))
         limits.extend(load_preset(c.preset, c.sets).run for c in cases)
         return [{"label": c.label, "outcome": "steady", "Q": 40.0 - i, "Q_std": 0.0}
                 for i, c in enumerate(cases)]  # fmt: skip
-
-    limits = []
 
     monkeypatch.setattr(suite, "run_rows", fake_rows)
     result = suite.run_suite(False, tmp_path, tmp_path / "work",

@@ -76,13 +76,15 @@ class Verdict:
 def band(row: Row) -> float:
     """Return a row's 95% time-averaging half-width over its Q (0 where not measured).
 
-    Two standard errors of the batch-means estimate, the time part of
-    :func:`foamsilo.post.grid.combined_uncertainty`.
+    The time part of :func:`foamsilo.post.grid.combined_uncertainty`, the band
+    a run reports (two standard errors of the batch-means estimate).
     """
+    from foamsilo.post.grid import combined_uncertainty
+
     q, se = row.get("Q"), row.get("Q_time_error")
     if not q or se is None or not math.isfinite(se):
         return 0.0
-    return 2.0 * float(se) / abs(float(q))
+    return float(combined_uncertainty(float(q), float(se), None)["relative"])
 
 
 def cost_fit(rows: list[Row]) -> tuple[float, float] | None:
@@ -412,8 +414,7 @@ def default_resolutions(result: dict[str, Any], table: dict[str, Any]) -> list[d
             src = "the preset's run" if run is not None else "measured"
             how = f"{src}, against the farthest of {len(refs)} extrapolations"
             how += f" (also {', '.join(also)})"
-        measured: Row = grid_q or next((r for r in data["rows"] if r["cells_across"] == cells), {})
-        row.update(level=level, error=err, band=band(measured), how=f"{ask['series']}, {how}",
+        row.update(level=level, error=err, band=band(grid_q or {}), how=f"{ask['series']}, {how}",
                    needed=_needed(ask["series"], data, level, refs))  # fmt: skip
         row["within"] = None if err is None else abs(err) + row["band"] <= level
         out.append(row)
