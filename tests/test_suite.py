@@ -816,3 +816,22 @@ def test_a_series_grid_is_within_a_level_only_with_its_time_band_inside():
         derive_work_precision(data)
         assert data["convergence"]["extrapolated"] == pytest.approx(2.0, rel=1e-9)
         assert data["convergence"]["coarsest_within_1pct"] == grid, se
+
+
+def test_every_planar_study_case_names_the_courant_limit_it_was_measured_at():
+    # the planar preset steps at Courant 0.75 over all cells since the evening
+    # of 2026-12-07; every study case measured before names the 0.5 it ran at
+    # (the time-step scenes set both limits per value; a target names no set)
+    from foamsilo.studies.cases import study_table
+
+    suite = study_table("suite")
+    stepped = [id(t) for t in suite["time-step"]["cases"]]
+    for study in ("suite", "bench", "verification"):
+        data = suite if study == "suite" else study_table(study)
+        tables = [t for t in _preset_tables(data, "zhou-planar")
+                  if "kind" not in t and id(t) not in stepped]  # fmt: skip
+        assert tables, study
+        for t in tables:
+            for key in ("set", "quick_set"):
+                if key in t:
+                    assert "run.max_courant" in t[key], (study, t.get("label", t.get("name")))
