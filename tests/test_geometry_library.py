@@ -345,6 +345,36 @@ def test_a_graded_lateral_orifice_mesh_passes_checkmesh_with_its_edges_refined(t
 
 
 @pytest.mark.openfoam
+@pytest.mark.parametrize("preset", ["zhou-cyl-lateral", "zhou-cyl-lateral-rect"])
+def test_a_graded_3d_lateral_orifice_mesh_passes_checkmesh(preset, tmp_path, openfoam):
+    """A cylinder's lateral orifice on graded rows, its edges refined: a valid hex mesh.
+
+    The orifice patch keeps its area (the rows' band ends on its edges, as
+    the sweep needs), and the wall beside it has rows of h / 4 at both edges.
+    """
+    from foamsilo.case import create_case
+
+    scene = load_preset(preset, ["mesh.cells_across=24", "mesh.growth_rate=1.15",
+                                 "mesh.coarse_cells_across=6", "mesh.orifice_region=0.5",
+                                 "mesh.orifice_edge_refinement=4"])  # fmt: skip
+    m = create_case(scene, tmp_path / preset, openfoam).mesh
+    assert m is not None and m.check.ok, m and m.check.failed_checks
+    assert m.cells == cells_estimate(scene)
+    assert set(m.check.cell_types) == {"hexahedra"}
+    assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=0.01)
+    s, h = scene.silo, scene.cell_size
+    assert s.orifice_height is not None
+    p = _msh_nodes(m.msh_file)
+    ys = np.unique(np.round(p[:, 1], 12))
+    hs = np.diff(ys)
+    for e in (s.orifice_height, s.orifice_height + s.orifice_width):
+        i = int(np.argmin(np.abs(ys - e)))
+        assert ys[i] == pytest.approx(e, abs=1e-9)
+        assert hs[i - 1] == pytest.approx(h / 4, rel=0.15)
+        assert hs[i] == pytest.approx(h / 4, rel=0.15)
+
+
+@pytest.mark.openfoam
 def test_an_orifice_edge_refined_3d_ogrid_passes_checkmesh(tmp_path, openfoam):
     from foamsilo.case import create_case
     from foamsilo.mesh.layout import ogrid_for

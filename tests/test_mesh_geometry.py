@@ -182,6 +182,64 @@ def test_graded_meshes_only_where_they_are_built():
         load_preset("venier-test2", ["mesh.growth_rate=1.1"])  # eccentric outlet
     with pytest.raises(SceneError, match=r"mesh\.growth_rate"):
         load_preset("zhou-planar", ["mesh.growth_rate=2"])
+    with pytest.raises(SceneError, match=r"mesh\.growth_rate.*allowed here: 1"):
+        load_preset("zhou-rect-lateral", ["mesh.representation='3d'", "silo.thickness=0.01",
+                                          "material.wall_friction=", "gas.mode='open-top'",
+                                          "gas.q_air_lpm=", "gas.q_air_scaled=",
+                                          "mesh.orifice_edge_refinement=1"])  # fmt: skip
+    with pytest.raises(SceneError, match=r"mesh\.growth_rate.*allowed here: 1"):
+        load_preset("hopper-conical", ["mesh.growth_rate=1.1"])
+
+
+@pytest.mark.parametrize("preset", ["zhou-cyl-lateral", "zhou-cyl-lateral-rect"])
+@pytest.mark.parametrize("n", [24, 40, 56])
+@pytest.mark.parametrize("k", [1.0, 4.0])
+def test_a_3d_lateral_orifice_s_rows_are_graded_from_its_edges(preset, n, k):
+    """A cylinder's lateral orifice: the rows narrow to h / k at its two edges and grow away.
+
+    The rows of the orifice's band end at its edges exactly (the band that
+    the sweep makes the orifice), no row of the orifice region is higher
+    than h, neighbours differ by at most the growth rate (squared where a
+    growing band meets the region), and the O-grid's cross-section is the
+    uniform mesh's, so the graded mesh has fewer cells only by its rows.
+    """
+    from foamsilo.mesh import ogrid_for
+    from foamsilo.mesh.layout import cells_estimate, edge_region
+
+    g = 1.15
+    base = [f"mesh.cells_across={n}"]
+    scene = load_preset(preset, [*base, f"mesh.growth_rate={g}", "mesh.coarse_cells_across=6",
+                                 "mesh.orifice_region=0.5", f"mesh.orifice_edge_refinement={k}"])  # fmt: skip
+    uniform = load_preset(preset, base)
+    s, h = scene.silo, scene.cell_size
+    assert s.orifice_height is not None
+    lo, hi = s.orifice_height, s.orifice_height + s.orifice_width
+    rows = vertical_rows(scene)
+    edges = [r.y0 for r in rows] + [rows[-1].y1]
+    assert min(abs(e - lo) for e in edges) < 1e-12 and min(abs(e - hi) for e in edges) < 1e-12
+    ys, hs = [0.0], []
+    for row in rows:
+        w = [row.ratio**j for j in range(row.n)]
+        for c in w:
+            hs.append((row.y1 - row.y0) * c / sum(w))
+            ys.append(ys[-1] + hs[-1])
+    hs_a, ys_a = np.array(hs), np.array(ys)
+    assert ys_a[-1] == pytest.approx(s.height, rel=1e-12)
+    for e in (lo, hi):
+        i = int(np.argmin(np.abs(ys_a - e)))
+        assert ys_a[i] == pytest.approx(e, abs=1e-12)
+        assert hs_a[i - 1] == pytest.approx(h / k, rel=0.15)
+        assert hs_a[i] == pytest.approx(h / k, rel=0.15)
+    mid = (ys_a[:-1] + ys_a[1:]) / 2
+    below, above = edge_region(scene, room=lo), edge_region(scene, room=s.height - hi)
+    region = (mid > lo - below) & (mid < hi + above)
+    # (whole rows fill the orifice's height: h to within half a row over its rows)
+    assert hs_a[region].max() <= h * (1 + 0.5 * h / s.orifice_width + 1e-9)
+    steps = hs_a[1:] / hs_a[:-1]
+    assert np.all(np.maximum(steps, 1 / steps) <= g**2 * 1.01)
+    assert ogrid_for(scene) == ogrid_for(uniform)
+    # the rows' savings (the edges' own rows cost some back)
+    assert cells_estimate(scene) < (0.7 if k == 1 else 0.8) * cells_estimate(uniform)
 
 
 @pytest.mark.parametrize("preset", ["zhou-planar", "zhou-cyl-bottom"])

@@ -374,7 +374,8 @@ class Mesh:
     )
     growth_rate: float = _f(
         "graded mesh: largest size ratio of neighbouring cells away from the orifice region "
-        "(1: uniform cells of L / cells_across; centred bottom orifices, planar lateral ones)",
+        "(1: uniform cells of L / cells_across; centred bottom orifices, lateral ones of "
+        "planar silos and of 3D cylinders, whose rows alone are graded)",
         "",
         ge=1,
         le=1.5,

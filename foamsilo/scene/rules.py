@@ -84,13 +84,19 @@ def validate(scene: Scene) -> None:
                 or (scene.representation == "3d" and s.shape == "cylindrical")
             )
         )
-        or (s.orifice_position == "lateral" and scene.representation == "planar")
+        or (
+            s.orifice_position == "lateral"
+            and (
+                scene.representation == "planar"
+                or (scene.representation == "3d" and s.shape == "cylindrical")
+            )
+        )
     ):
         raise SceneError(
             "mesh.growth_rate",
             f"got {me.growth_rate:g}: graded meshes are built for flat-bottomed silos with a "
             "centred bottom orifice, planar, axisymmetric or 3D cylinders, and for planar "
-            "silos with a lateral orifice (this scene: "
+            "silos and 3D cylinders with a lateral orifice (this scene: "
             f"{scene.representation}, {s.shape}, {s.orifice_position} orifice"
             f"{', off centre' if s.eccentricity else ''}); allowed here: 1 (uniform)",
         )
