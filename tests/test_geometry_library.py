@@ -316,6 +316,18 @@ def test_an_orifice_edge_refined_mesh_passes_checkmesh(preset, tmp_path, openfoa
     assert np.all(np.maximum(steps, 1 / steps) <= 1.3)
 
 
+def _assert_rows_narrow_at_the_orifice_edges(ys, scene, size: float, rel: float) -> None:
+    """The heights ``ys`` (sorted node heights) have rows of ``size`` on both sides of each
+    edge of a lateral orifice, and a node on each edge."""
+    s = scene.silo
+    hs = np.diff(ys)
+    for e in (s.orifice_height, s.orifice_height + s.orifice_width):
+        i = int(np.argmin(np.abs(ys - e)))
+        assert ys[i] == pytest.approx(e, abs=1e-9)
+        assert hs[i - 1] == pytest.approx(size, rel=rel)
+        assert hs[i] == pytest.approx(size, rel=rel)
+
+
 @pytest.mark.openfoam
 def test_a_graded_lateral_orifice_mesh_passes_checkmesh_with_its_edges_refined(tmp_path, openfoam):
     from foamsilo.case import create_case
@@ -334,12 +346,7 @@ def test_a_graded_lateral_orifice_mesh_passes_checkmesh_with_its_edges_refined(t
     p = _msh_nodes(m.msh_file)
     s, h = scene.silo, scene.cell_size
     wall = np.unique(np.round(p[np.abs(p[:, 0] - s.width) < 1e-12][:, 1], 12))
-    hs = np.diff(wall)
-    for e in (s.orifice_height, s.orifice_height + s.orifice_width):
-        i = int(np.argmin(np.abs(wall - e)))
-        assert wall[i] == pytest.approx(e, abs=1e-9)
-        assert hs[i - 1] == pytest.approx(h / 4, rel=0.05)
-        assert hs[i] == pytest.approx(h / 4, rel=0.05)
+    _assert_rows_narrow_at_the_orifice_edges(wall, scene, h / 4, rel=0.05)
     floor = np.diff(np.unique(np.round(p[np.abs(p[:, 1]) < 1e-12][:, 0], 12)))
     assert floor[-1] == pytest.approx(h, rel=1e-6) and floor.max() > 2 * h
 
@@ -362,16 +369,10 @@ def test_a_graded_3d_lateral_orifice_mesh_passes_checkmesh(preset, tmp_path, ope
     assert m.cells == cells_estimate(scene)
     assert set(m.check.cell_types) == {"hexahedra"}
     assert _patch_area(m.msh_file, "orifice") == pytest.approx(_orifice_area(scene), rel=0.01)
-    s, h = scene.silo, scene.cell_size
-    assert s.orifice_height is not None
     p = _msh_nodes(m.msh_file)
+    # (the edge band's first row is h / 4 to the 15% that fit it into whole rows of h)
     ys = np.unique(np.round(p[:, 1], 12))
-    hs = np.diff(ys)
-    for e in (s.orifice_height, s.orifice_height + s.orifice_width):
-        i = int(np.argmin(np.abs(ys - e)))
-        assert ys[i] == pytest.approx(e, abs=1e-9)
-        assert hs[i - 1] == pytest.approx(h / 4, rel=0.15)
-        assert hs[i] == pytest.approx(h / 4, rel=0.15)
+    _assert_rows_narrow_at_the_orifice_edges(ys, scene, scene.cell_size / 4, rel=0.15)
 
 
 @pytest.mark.openfoam
