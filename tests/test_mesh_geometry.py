@@ -210,7 +210,8 @@ def test_a_3d_lateral_orifice_s_rows_are_graded_from_its_edges(preset, n, k):
     base = [f"mesh.cells_across={n}"]
     scene = load_preset(preset, [*base, f"mesh.growth_rate={g}", "mesh.coarse_cells_across=6",
                                  "mesh.orifice_region=0.5", f"mesh.orifice_edge_refinement={k}"])  # fmt: skip
-    uniform = load_preset(preset, base)
+    uniform = load_preset(preset, [*base, "mesh.growth_rate=1", "mesh.coarse_cells_across=16",
+                                   "mesh.orifice_region=1"])  # fmt: skip
     s, h = scene.silo, scene.cell_size
     assert s.orifice_height is not None
     lo, hi = s.orifice_height, s.orifice_height + s.orifice_width
