@@ -253,3 +253,54 @@ def grid_convergence(
     return GridConvergence(
         list(cells), list(values), "monotone", p, ext, gci, errors, triples, used
     )
+
+
+def extrapolation_time_error(
+    cells: list[int],
+    values: list[float],
+    errors: list[float | None],
+    formal_order: float = FORMAL_ORDER,
+) -> float | None:
+    """Return the standard error of the extrapolated value from the values' own errors.
+
+    Each grid's value is a time average with a standard error (the batch
+    means of its steady window); the extrapolation from the three finest
+    grids amplifies them, by 1 / (r^p - 1) and through the observed order
+    they set. Propagated to first order: each of the three values is moved
+    by its error both ways, the extrapolation (order re-estimated) taken
+    again, and the central differences added in quadrature (the runs'
+    averages are independent).
+
+    Parameters
+    ----------
+    cells, values, formal_order
+        As :func:`grid_convergence`.
+    errors : list of float or None
+        Each value's standard error (absolute).
+
+    Returns
+    -------
+    float or None
+        The extrapolation's standard error, relative to the extrapolated
+        value; None when the three finest grids have no extrapolation, an
+        error is missing, or a value moved by its error leaves none (the
+        series' kind changes within its own noise: no linear propagation).
+    """
+    base = grid_convergence(cells, values, formal_order).extrapolated
+    last = errors[-3:]
+    if base is None or len(last) < 3 or any(e is None or not math.isfinite(e) for e in last):
+        return None
+    total = 0.0
+    for i in range(len(values) - 3, len(values)):
+        e = errors[i]
+        assert e is not None
+        moved = []
+        for sign in (1.0, -1.0):
+            v = list(values)
+            v[i] += sign * e
+            moved.append(grid_convergence(cells, v, formal_order).extrapolated)
+        up, down = moved
+        if up is None or down is None:
+            return None
+        total += ((up - down) / 2) ** 2
+    return math.sqrt(total) / abs(base)

@@ -269,7 +269,11 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     the cells across, to project the cost of the 2% and 1% resolutions.
     Recomputed when the report is written again from ``suite.json``.
     """
-    from foamsilo.post.convergence import coarsest_within, grid_convergence
+    from foamsilo.post.convergence import (
+        coarsest_within,
+        extrapolation_time_error,
+        grid_convergence,
+    )
 
     rows = data["rows"]
     # the finest row with a steady rate: a finer one that found none is no reference
@@ -294,6 +298,11 @@ def derive_work_precision(data: dict[str, Any]) -> None:
         return
     g = grid_convergence([r["cells_across"] for r in steady], [r["Q"] for r in steady])
     conv = g.as_dict()
+    conv["extrapolated_time_error"] = extrapolation_time_error(
+        [r["cells_across"] for r in steady],
+        [r["Q"] for r in steady],
+        [r.get("Q_time_error") for r in steady],
+    )
     if g.extrapolated is not None:
         for r in steady:
             r["err_vs_extrapolated"] = r["Q"] / g.extrapolated - 1
@@ -997,6 +1006,19 @@ def plot_time_steps(result: dict[str, Any], path: Path) -> None:
     finish(fig, ax, path, legend_size=6)
 
 
+def _time_error_words(se: float | None) -> str:
+    """Return the sentence on how far the rows' time averages move the extrapolation."""
+    if se is None:
+        return (
+            "The rows' time averages, each moved by its standard error, leave no "
+            "extrapolation or have none: its time error is not known."
+        )
+    return (
+        f"The rows' time averages alone move the extrapolation by {se:.2%} (one standard "
+        "error, propagated from the three grids' batch-means errors; not in the GCI)."
+    )
+
+
 def _convergence_words(conv: dict[str, Any] | None) -> str:
     """Return one paragraph on the grid convergence of a work-precision series."""
     if not conv:
@@ -1030,7 +1052,7 @@ def _convergence_words(conv: dict[str, Any] | None) -> str:
     parts = [
         f"{head}, observed order p = {conv['order']:.2f} (each run of three grids: {by_triple})"
         f"{capped}, extrapolated Q = {conv['extrapolated']:.5g}, GCI of the finest "
-        f"{conv['gci']:.1%}."
+        f"{conv['gci']:.1%}. {_time_error_words(conv.get('extrapolated_time_error'))}"
     ]
     for key, level in (("2pct", "2%"), ("1pct", "1%")):
         n, measured = conv[f"cells_for_{key}"], conv[f"coarsest_within_{key}"]
