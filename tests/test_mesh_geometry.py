@@ -218,13 +218,9 @@ def test_a_3d_lateral_orifice_s_rows_are_graded_from_its_edges(preset, n, k):
     rows = vertical_rows(scene)
     edges = [r.y0 for r in rows] + [rows[-1].y1]
     assert min(abs(e - lo) for e in edges) < 1e-12 and min(abs(e - hi) for e in edges) < 1e-12
-    ys, hs = [0.0], []
-    for row in rows:
-        w = [row.ratio**j for j in range(row.n)]
-        for c in w:
-            hs.append((row.y1 - row.y0) * c / sum(w))
-            ys.append(ys[-1] + hs[-1])
-    hs_a, ys_a = np.array(hs), np.array(ys)
+    # the node heights from each row's own layer fractions (what the sweep extrudes)
+    ys_a = np.array([0.0] + [r.y0 + (r.y1 - r.y0) * f for r in rows for f in r.heights()])
+    hs_a = np.diff(ys_a)
     assert ys_a[-1] == pytest.approx(s.height, rel=1e-12)
     for e in (lo, hi):
         i = int(np.argmin(np.abs(ys_a - e)))

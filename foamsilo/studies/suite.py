@@ -296,12 +296,11 @@ def derive_work_precision(data: dict[str, Any]) -> None:
     data["convergence"] = None
     if len(steady) < 3:
         return
-    g = grid_convergence([r["cells_across"] for r in steady], [r["Q"] for r in steady])
+    grids, rates = [r["cells_across"] for r in steady], [r["Q"] for r in steady]
+    g = grid_convergence(grids, rates)
     conv = g.as_dict()
     conv["extrapolated_time_error"] = extrapolation_time_error(
-        [r["cells_across"] for r in steady],
-        [r["Q"] for r in steady],
-        [r.get("Q_time_error") for r in steady],
+        grids, rates, [r.get("Q_time_error") for r in steady]
     )
     if g.extrapolated is not None:
         for r in steady:
