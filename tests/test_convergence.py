@@ -190,3 +190,16 @@ def test_the_extrapolations_time_error_is_its_rows_noise_carried_through(cells, 
     assert extrapolation_time_error(cells, values, se) == pytest.approx(mc, rel=0.05)
     assert extrapolation_time_error(cells, values, [0.0] * len(cells)) == 0.0
     assert extrapolation_time_error(cells, values, [*se[:-1], None]) is None
+
+
+def test_the_report_gives_the_extrapolations_time_error():
+    from foamsilo.studies.suite import _convergence_words
+
+    cells = [36, 48, 72, 96]
+    conv = grid_convergence(cells, series(cells, 1.5)).as_dict()
+    assert "time averages alone move the extrapolation by 1.23%" in _convergence_words(
+        {**conv, "extrapolated_time_error": 0.0123}
+    )
+    assert "its time error is not known" in _convergence_words(
+        {**conv, "extrapolated_time_error": None}
+    )
